@@ -1,0 +1,84 @@
+"""The pinhole camera model shared by the renderer, the label projection and the tests.
+
+World frame: Z up, metres, sea level at z = 0, camera at ``(0, 0, height)``. Heading is measured
+counter-clockwise from +x, pitch upward from the horizontal. Image coordinates ``(u, v)`` are in
+pixels with the origin at the top-left corner of the top-left pixel, ``u`` to the right and
+``v`` down; pixel ``(i, j)`` covers ``[i, i+1) x [j, j+1)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .spec import CameraSpec
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole camera with a horizontal field of view and square pixels."""
+
+    height_m: float
+    fov_deg: float
+    pitch_deg: float
+    heading_deg: float
+    width: int
+    height: int
+
+    @classmethod
+    def from_spec(cls, spec: CameraSpec) -> Camera:
+        """The camera a scene spec describes."""
+        width, height = spec.resolution
+        return cls(spec.height_m, spec.fov_deg, spec.pitch_deg, spec.heading_deg, width, height)
+
+    @property
+    def origin(self) -> np.ndarray:
+        """Camera position in world coordinates (m)."""
+        return np.array([0.0, 0.0, self.height_m])
+
+    def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Unit vectors ``(forward, right, up)`` of the camera in world coordinates."""
+        h, p = math.radians(self.heading_deg), math.radians(self.pitch_deg)
+        forward = np.array([math.cos(p) * math.cos(h), math.cos(p) * math.sin(h), math.sin(p)])
+        right = np.array([math.sin(h), -math.cos(h), 0.0])
+        up = np.cross(right, forward)
+        return forward, right, up
+
+    @property
+    def tan_half_fov_x(self) -> float:
+        return math.tan(math.radians(self.fov_deg) / 2.0)
+
+    @property
+    def tan_half_fov_y(self) -> float:
+        return self.tan_half_fov_x * self.height / self.width
+
+    def ray_directions(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Unit world directions (..., 3) of rays through image points ``(u, v)`` in pixels."""
+        forward, right, up = self.basis()
+        x = (2.0 * np.asarray(u, float) / self.width - 1.0) * self.tan_half_fov_x
+        y = (1.0 - 2.0 * np.asarray(v, float) / self.height) * self.tan_half_fov_y
+        d = forward + x[..., None] * right + y[..., None] * up
+        return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+    def pixel_center_directions(self) -> np.ndarray:
+        """Unit directions (H, W, 3) through every pixel centre."""
+        v, u = np.mgrid[0 : self.height, 0 : self.width] + 0.5
+        return self.ray_directions(u, v)
+
+    def project(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Project world points (N, 3) to ``(u, v, in_front)``; ``in_front`` is False behind the camera."""
+        forward, right, up = self.basis()
+        rel = np.asarray(points, float) - self.origin
+        z = rel @ forward
+        in_front = z > 1e-9
+        safe_z = np.where(in_front, z, 1.0)
+        x = (rel @ right) / safe_z / self.tan_half_fov_x
+        y = (rel @ up) / safe_z / self.tan_half_fov_y
+        return (x + 1.0) * 0.5 * self.width, (1.0 - y) * 0.5 * self.height, in_front
+
+    def horizon_elevation_deg(self) -> np.ndarray:
+        """Elevation angle (deg) of every pixel-centre ray; negative rays look down at the sea."""
+        d = self.pixel_center_directions()
+        return np.degrees(np.arcsin(np.clip(d[..., 2], -1.0, 1.0)))

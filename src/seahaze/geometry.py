@@ -1,0 +1,136 @@
+"""Scene geometry from a validated spec: the sea mesh and the placed vessel meshes.
+
+This is the step between the spec and the renderer: plain numpy meshes and materials, no
+Mitsuba. Seeds for the sea and the layout derive from ``render.seed`` unless the spec gives its
+own, so one master seed reproduces a whole scene.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import ocean, vessels
+from .camera import Camera
+from .spec import SceneSpec
+
+SEA_SEED_STREAM = 1
+LAYOUT_SEED_STREAM = 2
+VESSEL_SEED_STREAM = 3
+
+
+@dataclass
+class MeshData:
+    """A triangle mesh in world coordinates with a simple painted material."""
+
+    name: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    rgb: tuple[float, float, float] = (0.5, 0.5, 0.5)
+    roughness: float = 0.5
+
+
+@dataclass
+class VesselInstance:
+    """One vessel placed in the world."""
+
+    index: int
+    kind: str
+    class_id: int
+    placement: vessels.Placement
+    length_m: float
+    beam_m: float
+    air_draft_m: float
+    waterline_z: float
+    parts: list[MeshData] = field(default_factory=list)
+
+
+@dataclass
+class SceneGeometry:
+    """Everything the renderer draws, in world coordinates (Z up, metres)."""
+
+    sea: MeshData
+    sea_roughness: float
+    surface: ocean.OceanSurface
+    vessels: list[VesselInstance]
+
+
+def derived_seed(master: int, stream: int, explicit: int | None = None) -> int:
+    """The seed of one random stream: ``explicit`` when given, else derived from the master seed."""
+    if explicit is not None:
+        return explicit
+    return int(np.random.SeedSequence([master, stream]).generate_state(1)[0])
+
+
+def ocean_params(spec: SceneSpec) -> ocean.OceanParams:
+    """Ocean generator parameters for a scene (Beaufort force, when given, sets the wind)."""
+    sea = spec.sea
+    wind = ocean.beaufort_wind_speed(sea.beaufort) if sea.beaufort is not None else sea.wind_speed
+    return ocean.OceanParams(
+        model=sea.model,
+        spectrum=sea.spectrum,
+        wind_speed=wind,
+        fetch_km=sea.fetch_km,
+        direction_deg=sea.direction_deg,
+        choppiness=sea.choppiness,
+        seed=derived_seed(spec.render.seed, SEA_SEED_STREAM, sea.seed),
+        time_s=sea.time_s,
+    )
+
+
+def build_sea(spec: SceneSpec, camera: Camera) -> tuple[MeshData, float, ocean.OceanSurface]:
+    """The sea mesh to the horizon, its microfacet roughness and the surface for height queries."""
+    params = ocean_params(spec)
+    surface = ocean.make_surface(params)
+    vertices, faces = ocean.build_sea_mesh(surface, camera_height_m=camera.height_m, quality=spec.sea.quality)[:2]
+    roughness = spec.sea.roughness if spec.sea.roughness is not None else ocean.sub_grid_roughness(params.wind_speed, surface)
+    return MeshData("sea", vertices, faces, spec.sea.water_color, roughness), roughness, surface
+
+
+def layout_vessels(spec: SceneSpec, camera: Camera) -> list[vessels.Placement]:
+    """Where the vessels go: explicit ones first, then sampled ones (never overlapping)."""
+    rng = np.random.default_rng(derived_seed(spec.render.seed, LAYOUT_SEED_STREAM))
+    placements = vessels.place_explicit(spec.vessels.placed, camera.heading_deg, rng) if spec.vessels.placed else []
+    sampler = spec.vessels.sample
+    if sampler is not None and sampler.count > 0:
+        rng = np.random.default_rng(derived_seed(spec.render.seed, LAYOUT_SEED_STREAM, sampler.seed))
+        weights = sampler.classes or dict.fromkeys(vessels.CLASS_NAMES, 1.0)
+        spread = sampler.bearing_spread_deg if sampler.bearing_spread_deg is not None else 0.45 * camera.fov_deg
+        placements += vessels.sample_layout(
+            count=sampler.count,
+            class_weights=weights,
+            distance_range_m=sampler.distance_m,
+            distribution=sampler.distribution,
+            bearing_spread_deg=spread,
+            min_separation_m=sampler.min_separation_m,
+            camera_heading_deg=camera.heading_deg,
+            rng=rng,
+            existing=placements,
+        )
+    return placements
+
+
+def build_vessels(spec: SceneSpec, camera: Camera, surface: ocean.OceanSurface) -> list[VesselInstance]:
+    """Vessel meshes placed on the sea; each vessel's waterline follows the surface height."""
+    rng = np.random.default_rng(derived_seed(spec.render.seed, VESSEL_SEED_STREAM))
+    instances = []
+    for index, placement in enumerate(layout_vessels(spec, camera)):
+        model = vessels.build_vessel(placement.kind, placement.length_m, rng)
+        parts = vessels.place_on_sea(model, placement, surface.height)
+        waterline = float(surface.height(np.array([placement.x]), np.array([placement.y]))[0])
+        meshes = [
+            MeshData(f"vessel{index:03d}_{name}", np.asarray(v, np.float32), np.asarray(f, np.uint32), tuple(mat.rgb), mat.roughness)
+            for name, v, f, mat in parts
+        ]
+        instances.append(VesselInstance(
+            index, placement.kind, vessels.CLASS_NAMES.index(placement.kind), placement,
+            model.length_m, model.beam_m, model.air_draft_m, waterline, meshes,
+        ))
+    return instances
+
+
+def build_geometry(spec: SceneSpec, camera: Camera) -> SceneGeometry:
+    """Sea and vessels for a scene."""
+    sea, roughness, surface = build_sea(spec, camera)
+    return SceneGeometry(sea, roughness, surface, build_vessels(spec, camera, surface))

@@ -1,0 +1,56 @@
+"""Bounding boxes from the instance pass, and the YOLO text format.
+
+Boxes are tight around the pixels whose centre ray first hits a vessel, so they are
+occlusion-aware by construction: a vessel behind another gets the box of its visible part.
+Box edges lie on pixel boundaries: a vessel covering pixel columns ``i0..i1`` spans
+``[i0, i1 + 1)`` in pixel coordinates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Box:
+    """An axis-aligned box in pixel coordinates (edges), for one vessel."""
+
+    vessel: int
+    class_id: int
+    x0: float
+    y0: float
+    x1: float
+    y1: float
+    pixels: int
+    """Number of visible pixels of the vessel."""
+
+    def yolo(self, width: int, height: int) -> tuple[float, float, float, float]:
+        """Normalised ``(cx, cy, w, h)`` for YOLO."""
+        return (
+            (self.x0 + self.x1) / 2 / width,
+            (self.y0 + self.y1) / 2 / height,
+            (self.x1 - self.x0) / width,
+            (self.y1 - self.y0) / height,
+        )
+
+
+def boxes_from_instances(instance: np.ndarray, class_ids: list[int], min_pixels: int = 1) -> list[Box]:
+    """Tight boxes of every vessel visible in an (H, W) instance map (-1 = no vessel)."""
+    boxes = []
+    for vessel, class_id in enumerate(class_ids):
+        rows, cols = np.nonzero(instance == vessel)
+        if len(rows) < min_pixels:
+            continue
+        boxes.append(Box(vessel, class_id, float(cols.min()), float(rows.min()), float(cols.max() + 1), float(rows.max() + 1), len(rows)))
+    return boxes
+
+
+def yolo_text(boxes: list[Box], width: int, height: int) -> str:
+    """YOLO label file content: one ``class cx cy w h`` line per box, 6 decimals."""
+    lines = []
+    for box in boxes:
+        cx, cy, w, h = box.yolo(width, height)
+        lines.append(f"{box.class_id} {cx:.6f} {cy:.6f} {w:.6f} {h:.6f}")
+    return "".join(line + "\n" for line in lines)

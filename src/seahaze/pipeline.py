@@ -1,0 +1,182 @@
+"""Render scenes into a dataset folder: spec → geometry → Mitsuba passes → writers.
+
+One Mitsuba scene is loaded per scene; the clean pass, the geometry pass and every hazy level
+reuse it, only the medium changes (DESIGN.md §4).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import imaging, labels
+from .camera import Camera
+from .dataset import CLEAN, Layout, data_yaml_text, level_entries, manifest, write_json, write_text
+from .geometry import SceneGeometry, build_geometry
+from .render import passes
+from .render.mitsuba_scene import build_scene
+from .render.variant import select_variant
+from .spec import SceneSpec
+from .vessels import CLASS_NAMES
+from .visibility import extinction_coefficient, level_name
+
+Progress = Callable[[str], None]
+
+
+@dataclass
+class SceneResult:
+    """What rendering one scene produced, with wall-clock seconds per pass."""
+
+    name: str
+    variant: str
+    exposure: float
+    boxes: list[labels.Box]
+    timings: dict[str, float] = field(default_factory=dict)
+    meta: dict[str, Any] = field(default_factory=dict)
+
+
+def _quiet(_: str) -> None:
+    pass
+
+
+class _Timer:
+    def __init__(self, timings: dict[str, float], key: str):
+        self.timings, self.key = timings, key
+
+    def __enter__(self) -> None:
+        self.start = time.perf_counter()
+
+    def __exit__(self, *exc: object) -> None:
+        self.timings[self.key] = time.perf_counter() - self.start
+
+
+def _vessel_meta(geometry: SceneGeometry, boxes: list[labels.Box], camera: Camera) -> list[dict[str, Any]]:
+    by_vessel = {b.vessel: b for b in boxes}
+    out = []
+    for v in geometry.vessels:
+        p = v.placement
+        box = by_vessel.get(v.index)
+        out.append({
+            "index": v.index,
+            "class": v.kind,
+            "class_id": v.class_id,
+            "position_m": [p.x, p.y, v.waterline_z],
+            "heading_deg": p.heading_deg,
+            "length_m": v.length_m,
+            "beam_m": v.beam_m,
+            "air_draft_m": v.air_draft_m,
+            "distance_m": float(np.hypot(p.x, p.y)),
+            "bearing_deg": p.bearing_deg,
+            "box_px": None if box is None else [box.x0, box.y0, box.x1, box.y1],
+            "visible_pixels": 0 if box is None else box.pixels,
+        })
+    return out
+
+
+def render_scene(spec: SceneSpec, name: str, root: Path, progress: Progress = _quiet) -> SceneResult:
+    """Render one scene (clean, distance, every level of ``spec.haze.levels``) into ``root``."""
+    layout = Layout(root)
+    timings: dict[str, float] = {}
+    variant = select_variant(spec.render.variant)
+    camera = Camera.from_spec(spec.camera)
+    levels = list(spec.haze.levels)
+    haze = spec.haze
+    with _Timer(timings, "geometry_build"):
+        geometry = build_geometry(spec, camera)
+    with _Timer(timings, "scene_load"):
+        loaded = build_scene(spec, camera, geometry, levels)
+    progress(f"{name}: scene loaded ({variant}, {len(geometry.vessels)} vessels)")
+
+    with _Timer(timings, "aov"):
+        geo = passes.render_geometry(loaded)
+    with _Timer(timings, "clean"):
+        clean = passes.render_clean(loaded, spec.render.spp, spec.render.seed, haze.albedo, haze.g)
+    progress(f"{name}: clean pass {timings['clean']:.1f} s")
+
+    elevation = np.degrees(np.arcsin(np.clip(geo.directions[..., 2], -1.0, 1.0)))
+    exposure = imaging.auto_exposure(clean, geo.distance_m, elevation) if spec.render.exposure == "auto" else float(spec.render.exposure)
+    boxes = labels.boxes_from_instances(geo.instance, [v.class_id for v in geometry.vessels])
+    label_text = labels.yolo_text(boxes, camera.width, camera.height)
+
+    _write_image(layout, CLEAN, name, clean, exposure, spec.render.write_exr)
+    write_text(layout.label(CLEAN, name), label_text)
+    imaging.write_exr(layout.depth(name), {"Z": geo.distance_m})
+
+    level_meta = []
+    for i, v in enumerate(levels):
+        sigma = extinction_coefficient(v, haze.threshold)
+        key = level_name(v)
+        with _Timer(timings, f"level_{key}"):
+            if spec.render.mode == "reference":
+                radiance = passes.render_reference_level(loaded, sigma, haze.albedo, haze.g, spec.render.spp, spec.render.seed, i)
+                airlight = None
+            else:
+                airlight = passes.render_airlight(loaded, sigma, haze.albedo, haze.g, spec.render.airlight_spp, spec.render.seed, i)
+                radiance = passes.asm_level(clean, geo, sigma, airlight.rgb, haze.top_m)
+        _write_image(layout, key, name, radiance, exposure, spec.render.write_exr)
+        write_text(layout.label(key, name), label_text)
+        entry: dict[str, Any] = {"name": key, "visibility_m": v, "sigma_per_m": sigma}
+        if airlight is not None:
+            entry["airlight_rgb"] = airlight.rgb.tolist()
+            entry["airlight_stderr_rgb"] = airlight.stderr.tolist()
+        level_meta.append(entry)
+        progress(f"{name}: {key} ({spec.render.mode}) {timings[f'level_{key}']:.1f} s")
+
+    meta = {
+        "scene": name,
+        "variant": variant,
+        "mode": spec.render.mode,
+        "exposure": exposure,
+        "camera": {**spec.camera.model_dump(mode="json"), "position_m": camera.origin.tolist()},
+        "sun": spec.sun.model_dump(mode="json"),
+        "sky": spec.sky.model_dump(mode="json"),
+        "sea": {**spec.sea.model_dump(mode="json"), "roughness_used": geometry.sea_roughness,
+                "triangles": len(geometry.sea.faces)},
+        "haze": {**haze.model_dump(mode="json", exclude={"levels"}), "box_half_width_m": loaded.box_half_width_m},
+        "levels": level_meta,
+        "vessels": _vessel_meta(geometry, boxes, camera),
+    }
+    write_json(layout.meta(name), meta)
+    return SceneResult(name, variant, exposure, boxes, timings, meta)
+
+
+def _write_image(layout: Layout, level: str, scene: str, radiance: np.ndarray, exposure: float, exr: bool) -> None:
+    imaging.write_png(layout.image(level, scene), imaging.to_srgb8(radiance, exposure))
+    if exr:
+        imaging.write_rgb_exr(layout.exr(level, scene), radiance)
+
+
+class DatasetError(ValueError):
+    """Scenes that cannot form one dataset (e.g. different levels); the message is for the user."""
+
+
+def render_dataset(scenes: Sequence[tuple[SceneSpec, str]], root: Path, progress: Progress = _quiet) -> list[SceneResult]:
+    """Render several scenes into one dataset folder and write ``data.yaml`` and ``dataset.json``."""
+    if not scenes:
+        raise DatasetError("no scene to render")
+    first = scenes[0][0].haze
+    for spec, name in scenes[1:]:
+        if list(spec.haze.levels) != list(first.levels) or spec.haze.threshold != first.threshold:
+            raise DatasetError(f"scene '{name}' has other haze levels or threshold than '{scenes[0][1]}'; pass --vis to use the same levels")
+    names = [n for _, n in scenes]
+    duplicates = {n for n in names if names.count(n) > 1}
+    if duplicates:
+        raise DatasetError(f"two scenes share the name(s) {sorted(duplicates)}; set 'name:' in the YAML")
+    layout = Layout(root)
+    root.mkdir(parents=True, exist_ok=True)
+    levels = level_entries(list(first.levels), first.threshold)
+    write_text(layout.data_yaml, data_yaml_text(root, [entry["name"] for entry in levels], CLASS_NAMES))
+    results = []
+    scene_status: dict[str, Any] = {}
+    for spec, name in scenes:
+        result = render_scene(spec, name, root, progress)
+        results.append(result)
+        scene_status[name] = {"status": "done", "seed": spec.render.seed, "config": spec.model_dump(mode="json", by_alias=True)}
+        config = {"threshold": str(first.threshold), "mode": spec.render.mode, "spp": spec.render.spp, "resolution": list(spec.camera.resolution)}
+        write_json(layout.manifest, manifest(config, levels, CLASS_NAMES, scene_status))
+    return results

@@ -1,0 +1,1 @@
+"""Mitsuba-facing code: variant selection, scene assembly and render passes."""

@@ -1,0 +1,180 @@
+"""Turn scene geometry into one loaded Mitsuba scene whose haze changes per level.
+
+The scene holds: a perspective camera near the origin, a tiny horizon camera for the ASM
+airlight, the ``sunsky`` emitter, the sea and vessel meshes, and a box with a null BSDF whose
+interior is the haze medium (DESIGN.md §4: a fog attached only to the sensor receives no light).
+The box spans ``[-W, W]^2`` horizontally with ``sigma_min * W >= 8`` for the thinnest haze of the
+run, so light entering through its sides is attenuated by at least ``e^-8``; vertically it runs
+from below the sea surface to the haze top. The medium is changed per level through
+``mi.traverse`` (no reload, no recompilation); the clean pass sets its extinction to zero.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..camera import Camera
+from ..geometry import MeshData, SceneGeometry
+from ..spec import SceneSpec
+from ..visibility import extinction_coefficient
+
+HAZE_ID = "haze"
+HAZE_BOX_ID = "haze_box"
+BOX_OPTICAL_HALF_WIDTH = 8.0
+"""Minimum optical depth ``sigma * W`` from the camera to the side of the haze box (DESIGN.md §4)."""
+HAZE_BOTTOM_M = -60.0
+"""Bottom of the haze box below sea level; the sea surface hides everything beneath it."""
+FAR_CLIP_M = 1.0e7
+AIRLIGHT_FOV_DEG = 0.5
+AIRLIGHT_RES = 8
+
+
+def _mi():
+    import mitsuba as mi
+
+    return mi
+
+
+def sun_direction(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
+    """Unit vector toward the sun (world frame, Z up, azimuth counter-clockwise from +x)."""
+    e, a = math.radians(elevation_deg), math.radians(azimuth_deg)
+    return np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)])
+
+
+def haze_box_half_width(visibilities_m: list[float], threshold: str) -> float:
+    """Horizontal half-width (m) of the haze box so that ``sigma * W >= 8`` at every level."""
+    sigma_min = min(extinction_coefficient(v, threshold) for v in visibilities_m)
+    return BOX_OPTICAL_HALF_WIDTH / sigma_min
+
+
+def _sensor_dict(camera: Camera, width: int, height: int, fov_deg: float, pitch_deg: float, inside_haze: bool) -> dict:
+    mi = _mi()
+    cam = Camera(camera.height_m, fov_deg, pitch_deg, camera.heading_deg, width, height)
+    forward, _right, up = cam.basis()
+    origin = cam.origin
+    sensor: dict[str, Any] = {
+        "type": "perspective",
+        "fov": fov_deg,
+        "fov_axis": "x",
+        "near_clip": 0.05,
+        "far_clip": FAR_CLIP_M,
+        "to_world": mi.ScalarTransform4f().look_at(origin=origin.tolist(), target=(origin + forward).tolist(), up=up.tolist()),
+        "sampler": {"type": "independent"},
+        "film": {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"}, "pixel_format": "rgb"},
+    }
+    if inside_haze:
+        sensor["medium"] = {"type": "ref", "id": HAZE_ID}
+    return sensor
+
+
+def _mesh(mesh: MeshData, bsdf: dict) -> Any:
+    """A Mitsuba mesh built straight from numpy arrays (no files)."""
+    mi = _mi()
+    props = mi.Properties()
+    props["bsdf"] = mi.load_dict(bsdf)
+    m = mi.Mesh(mesh.name, vertex_count=len(mesh.vertices), face_count=len(mesh.faces), props=props)
+    params = mi.traverse(m)
+    params["vertex_positions"] = np.ascontiguousarray(mesh.vertices, dtype=np.float32).ravel()
+    params["faces"] = np.ascontiguousarray(mesh.faces, dtype=np.uint32).ravel()
+    params.update()
+    return m
+
+
+def _sea_bsdf(spec: SceneSpec, roughness: float) -> dict:
+    """Fresnel interface (n = ior) over a dark diffuse water body: Mitsuba's rough plastic."""
+    return {
+        "type": "roughplastic",
+        "distribution": "ggx",
+        "alpha": roughness,
+        "int_ior": spec.sea.ior,
+        "ext_ior": 1.000277,
+        "nonlinear": False,
+        "diffuse_reflectance": {"type": "rgb", "value": list(spec.sea.water_color)},
+    }
+
+
+def _vessel_bsdf(rgb: tuple[float, float, float], roughness: float) -> dict:
+    """Painted steel: a dielectric varnish over a diffuse paint colour."""
+    return {
+        "type": "roughplastic",
+        "distribution": "ggx",
+        "alpha": max(0.05, roughness),
+        "diffuse_reflectance": {"type": "rgb", "value": list(rgb)},
+    }
+
+
+@dataclass
+class LoadedScene:
+    """A Mitsuba scene plus the handles the render passes need."""
+
+    scene: Any
+    params: Any
+    camera: Camera
+    box_half_width_m: float
+    haze_top_m: float
+    camera_in_haze: bool
+    shape_ids: dict[int, int]
+    """Mitsuba shape registry id → vessel index (the sea and the haze box map to -1, -2)."""
+
+    def set_haze(self, sigma_t: float, albedo: float, g: float) -> None:
+        """Change the medium in place (no reload, no recompilation)."""
+        self.params[f"{HAZE_ID}.sigma_t.value.value"] = sigma_t
+        self.params[f"{HAZE_ID}.albedo.value.value"] = albedo
+        self.params[f"{HAZE_ID}.phase_function.g"] = g
+        self.params.update()
+
+
+def shape_registry_id(shape: Any) -> int:
+    """The integer id Mitsuba's intersection records use for ``shape``."""
+    mi = _mi()
+    import drjit as dr
+
+    ptr = mi.ShapePtr(shape)
+    return int(dr.reinterpret_array(mi.UInt32, ptr)[0]) if dr.is_jit_v(ptr) else id(shape)
+
+
+def build_scene(spec: SceneSpec, camera: Camera, geometry: SceneGeometry, visibilities_m: list[float]) -> LoadedScene:
+    """Load the Mitsuba scene for ``spec`` with a haze box wide enough for ``visibilities_m``."""
+    mi = _mi()
+    top = spec.haze.top_m
+    half_width = haze_box_half_width(visibilities_m or [1.0e4], spec.haze.threshold)
+    inside = camera.height_m < top
+    sun = sun_direction(spec.sun.elevation_deg, spec.sun.azimuth_deg)
+    scene: dict[str, Any] = {
+        "type": "scene",
+        "integrator": {"type": "volpath", "max_depth": spec.render.max_depth, "rr_depth": 8},
+        HAZE_ID: {"type": "homogeneous", "sigma_t": 0.0, "albedo": spec.haze.albedo, "phase": {"type": "hg", "g": spec.haze.g}},
+        "sensor": _sensor_dict(camera, camera.width, camera.height, camera.fov_deg, camera.pitch_deg, inside),
+        "sensor_airlight": _sensor_dict(camera, AIRLIGHT_RES, AIRLIGHT_RES, AIRLIGHT_FOV_DEG, 0.0, inside),
+        "sky": {
+            "type": "sunsky",
+            "sun_direction": sun.tolist(),
+            "turbidity": spec.sky.turbidity,
+            "albedo": spec.sky.ground_albedo,
+            "sun_scale": spec.sun.scale,
+            "sky_scale": spec.sky.scale,
+        },
+        HAZE_BOX_ID: {
+            "type": "cube",
+            "to_world": mi.ScalarTransform4f().translate([0.0, 0.0, 0.5 * (top + HAZE_BOTTOM_M)]).scale([half_width, half_width, 0.5 * (top - HAZE_BOTTOM_M)]),
+            "bsdf": {"type": "null"},
+            "interior": {"type": "ref", "id": HAZE_ID},
+        },
+        "sea": _mesh(geometry.sea, _sea_bsdf(spec, geometry.sea_roughness)),
+    }
+    for vessel in geometry.vessels:
+        for part in vessel.parts:
+            scene[part.name] = _mesh(part, _vessel_bsdf(part.rgb, part.roughness))
+    loaded = mi.load_dict(scene)
+    params = mi.traverse(loaded)
+    shape_ids: dict[int, int] = {}
+    vessel_of_part = {part.name: v.index for v in geometry.vessels for part in v.parts}
+    for shape in loaded.shapes():
+        sid = shape.id()
+        index = vessel_of_part.get(sid, -2 if sid == HAZE_BOX_ID else -1)
+        shape_ids[shape_registry_id(shape)] = index
+    return LoadedScene(loaded, params, camera, half_width, top, inside, shape_ids)

@@ -1,0 +1,159 @@
+"""Render passes over one loaded scene: geometry (distance, instances), clean, hazy levels.
+
+Modes of a hazy level
+    ``reference``  Mitsuba ``volpath`` through the haze box: unbiased, slow, noisy at low spp.
+    ``asm``        The atmospheric scattering model ``I = J t + A (1 - t)`` with
+                   ``t = exp(-sigma L)``, ``J`` the clean radiance and ``L`` the length of the
+                   camera ray inside the haze layer (the exact distance for surfaces below the
+                   haze top; for the sky the path up to the layer top). ``A`` is the level's
+                   horizon airlight: a ``volpath`` render of a narrow horizontal view at the
+                   camera height, where the haze is optically thick at every level.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .mitsuba_scene import HAZE_BOTTOM_M, LoadedScene
+
+GEOMETRY_MAX_NULL_CROSSINGS = 4
+"""The haze box is convex, so a camera ray crosses its null surface at most twice."""
+
+
+@dataclass
+class GeometryPass:
+    """Per-pixel geometry at pixel centres, from rays that pass through the haze box."""
+
+    distance_m: np.ndarray
+    """(H, W) float32 distance along the ray to the first surface (m), ``inf`` for the sky."""
+    instance: np.ndarray
+    """(H, W) int32 vessel index of the first surface, -1 for sea and sky."""
+    directions: np.ndarray
+    """(H, W, 3) float32 unit ray directions in the world frame."""
+    origin: np.ndarray
+    """(3,) camera position (m)."""
+
+
+def _seed(base: int, *parts: int) -> int:
+    """A 31-bit render seed derived from the scene seed and the pass, so passes never share noise."""
+    seq = np.random.SeedSequence([base, *parts])
+    return int(seq.generate_state(1, dtype=np.uint32)[0] & 0x7FFFFFFF)
+
+
+def render_geometry(loaded: LoadedScene) -> GeometryPass:
+    """Trace one ray per pixel centre, passing through the haze box's null surface.
+
+    Mitsuba's ``aov`` integrator stops at null shapes (DESIGN.md §4), so the rays are traced here
+    with ``scene.ray_intersect`` and continued past the haze box.
+    """
+    import drjit as dr
+    import mitsuba as mi
+
+    cam = loaded.camera
+    sensor = loaded.scene.sensors()[0]
+    width, height = cam.width, cam.height
+    idx = dr.arange(mi.UInt32, width * height)
+    px = mi.Point2f((mi.Float(idx % width) + 0.5) / width, (mi.Float(idx // width) + 0.5) / height)
+    ray, _ = sensor.sample_ray(0.0, 0.5, px, mi.Point2f(0.5, 0.5))
+    origin = np.array([ray.o.x[0], ray.o.y[0], ray.o.z[0]], dtype=np.float64)
+    directions = np.stack([np.array(ray.d.x), np.array(ray.d.y), np.array(ray.d.z)], axis=-1)
+
+    box_id = next(k for k, v in loaded.shape_ids.items() if v == -2)
+    hit_point = np.full((width * height, 3), np.nan)
+    shape = np.zeros(width * height, dtype=np.int64)
+    active = np.ones(width * height, dtype=bool)
+    current = mi.Ray3f(ray)
+    for _ in range(GEOMETRY_MAX_NULL_CROSSINGS):
+        si = loaded.scene.ray_intersect(current)
+        valid = np.array(si.is_valid())
+        sid = np.array(dr.reinterpret_array(mi.UInt32, si.shape)).astype(np.int64)
+        p = np.stack([np.array(si.p.x), np.array(si.p.y), np.array(si.p.z)], axis=-1)
+        done = active & (~valid | (sid != box_id))
+        hit_point[done & valid] = p[done & valid]
+        shape[done & valid] = sid[done & valid]
+        active &= ~done
+        if not active.any():
+            break
+        current = si.spawn_ray(current.d)
+    distance = np.linalg.norm(hit_point - origin, axis=-1)
+    distance = np.where(np.isfinite(distance), distance, np.inf).astype(np.float32)
+    lookup = np.vectorize(lambda s: loaded.shape_ids.get(int(s), -1), otypes=[np.int32])
+    instance = np.where(np.isfinite(distance), lookup(shape), -1).astype(np.int32)
+    return GeometryPass(
+        distance.reshape(height, width),
+        instance.reshape(height, width),
+        directions.reshape(height, width, 3).astype(np.float32),
+        origin,
+    )
+
+
+def render_radiance(loaded: LoadedScene, spp: int, seed: int, sensor_index: int = 0) -> np.ndarray:
+    """Render linear RGB radiance (H, W, 3) float32 with the scene's current medium."""
+    import mitsuba as mi
+
+    image = mi.render(loaded.scene, sensor=sensor_index, spp=spp, seed=seed)
+    return np.array(image, dtype=np.float32)
+
+
+def render_clean(loaded: LoadedScene, spp: int, seed: int, albedo: float, g: float) -> np.ndarray:
+    """Haze-free radiance: the same scene with the medium's extinction set to zero."""
+    loaded.set_haze(0.0, albedo, g)
+    return render_radiance(loaded, spp, _seed(seed, 0))
+
+
+def render_reference_level(loaded: LoadedScene, sigma: float, albedo: float, g: float, spp: int, seed: int, level_index: int) -> np.ndarray:
+    """Hazy radiance by brute-force volumetric path tracing (``volpath``)."""
+    loaded.set_haze(sigma, albedo, g)
+    return render_radiance(loaded, spp, _seed(seed, 1, level_index))
+
+
+@dataclass(frozen=True)
+class Airlight:
+    """The horizon airlight of one level (linear RGB radiance) and its Monte Carlo standard error."""
+
+    rgb: np.ndarray
+    stderr: np.ndarray
+
+
+AIRLIGHT_BATCHES = 4
+
+
+def render_airlight(loaded: LoadedScene, sigma: float, albedo: float, g: float, spp: int, seed: int, level_index: int) -> Airlight:
+    """Mean radiance of a narrow horizontal view in the haze, from independent batches."""
+    loaded.set_haze(sigma, albedo, g)
+    per_batch = max(1, spp // AIRLIGHT_BATCHES)
+    means = np.stack([
+        render_radiance(loaded, per_batch, _seed(seed, 2, level_index, b), sensor_index=1).reshape(-1, 3).mean(axis=0)
+        for b in range(AIRLIGHT_BATCHES)
+    ])
+    return Airlight(means.mean(axis=0), means.std(axis=0, ddof=1) / np.sqrt(AIRLIGHT_BATCHES))
+
+
+def haze_path_length(geometry: GeometryPass, bottom_m: float, top_m: float) -> np.ndarray:
+    """Length (m) of each camera ray inside the haze layer ``bottom_m <= z <= top_m``.
+
+    A ray ends at its surface distance (``inf`` for the sky); only the part inside the layer
+    attenuates. Exact for a straight ray and a horizontally unbounded layer.
+    """
+    oz = float(geometry.origin[2])
+    dz = geometry.directions[..., 2].astype(np.float64)
+    end = geometry.distance_m.astype(np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s_bottom = (bottom_m - oz) / dz
+        s_top = (top_m - oz) / dz
+    flat = np.abs(dz) < 1e-12
+    inside_now = bottom_m <= oz <= top_m
+    enter = np.where(flat, 0.0 if inside_now else np.inf, np.minimum(s_bottom, s_top))
+    leave = np.where(flat, np.inf if inside_now else 0.0, np.maximum(s_bottom, s_top))
+    start = np.maximum(enter, 0.0)
+    stop = np.minimum(leave, end)
+    return np.maximum(stop - start, 0.0)
+
+
+def asm_level(clean: np.ndarray, geometry: GeometryPass, sigma: float, airlight_rgb: np.ndarray, top_m: float) -> np.ndarray:
+    """Hazy radiance by the atmospheric scattering model ``I = J t + A (1 - t)``."""
+    length = haze_path_length(geometry, HAZE_BOTTOM_M, top_m)
+    t = np.exp(-sigma * length)[..., None]
+    return (clean * t + airlight_rgb[None, None, :] * (1.0 - t)).astype(np.float32)

@@ -1,0 +1,105 @@
+"""Choose the Mitsuba variant and find a libLLVM that drjit can use.
+
+Mitsuba's ``llvm_*`` variants JIT-compile kernels with libLLVM. Debian 12's default LLVM 15 makes
+drjit abort ("Cannot select ... fminimum"); LLVM 19 (``apt-get install libllvm19``) works. drjit
+reads ``DRJIT_LIBLLVM_PATH`` when its LLVM backend starts, so the path is set before Mitsuba is
+imported. ``auto`` tries ``cuda_ad_rgb`` (where a GPU works), then ``llvm_ad_rgb``, then
+``scalar_rgb`` with a warning (about 2x slower per sample and single-threaded per ray here).
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import re
+import warnings
+from pathlib import Path
+
+MIN_LLVM_MAJOR = 16
+"""Oldest libLLVM accepted; 15 aborts inside drjit, 19 is the version tested here."""
+
+_LLVM_DIRS = ("/usr/lib/x86_64-linux-gnu", "/usr/lib/aarch64-linux-gnu", "/usr/lib64", "/usr/lib", "/usr/local/lib")
+_AUTO_ORDER = ("cuda_ad_rgb", "llvm_ad_rgb", "scalar_rgb")
+_selected: str | None = None
+
+
+def _llvm_major(path: str) -> int | None:
+    match = re.search(r"libLLVM[-.]?(?:so\.)?(\d+)", Path(path).name)
+    return int(match[1]) if match else None
+
+
+def find_libllvm() -> str | None:
+    """Path of the newest libLLVM with major version >= MIN_LLVM_MAJOR, or None."""
+    env = os.environ.get("DRJIT_LIBLLVM_PATH")
+    if env and Path(env).exists():
+        return env
+    candidates = []
+    for folder in _LLVM_DIRS:
+        for path in glob.glob(os.path.join(folder, "libLLVM*.so*")):
+            major = _llvm_major(path)
+            if major is not None and major >= MIN_LLVM_MAJOR:
+                candidates.append((major, path))
+    return max(candidates)[1] if candidates else None
+
+
+class VariantError(RuntimeError):
+    """The requested Mitsuba variant cannot run on this machine."""
+
+
+def _cuda_usable() -> bool:
+    """True where an NVIDIA driver is present; checked before touching the CUDA backend."""
+    return any(Path(p).exists() for p in ("/dev/nvidia0", "/dev/nvidiactl")) and bool(
+        glob.glob("/usr/lib/x86_64-linux-gnu/libcuda.so*") + glob.glob("/usr/lib64/libcuda.so*")
+    )
+
+
+def _try_set(name: str) -> bool:
+    import mitsuba as mi
+
+    if name not in mi.variants():
+        return False
+    try:
+        mi.set_variant(name)
+    except Exception:  # noqa: BLE001 - Mitsuba raises plain exceptions for a missing backend
+        return False
+    return True
+
+
+def select_variant(requested: str = "auto") -> str:
+    """Activate and return a Mitsuba variant (``auto`` or an explicit name such as ``llvm_ad_rgb``).
+
+    Raises :class:`VariantError` with the available variants for a name that cannot run.
+    """
+    global _selected
+    if _selected is not None and requested in ("auto", _selected):
+        return _selected
+    llvm = find_libllvm()
+    if llvm:
+        os.environ["DRJIT_LIBLLVM_PATH"] = llvm
+    import mitsuba as mi
+
+    if requested != "auto":
+        if requested.startswith("llvm") and not llvm:
+            raise VariantError(f"variant {requested!r} needs libLLVM >= {MIN_LLVM_MAJOR}; install it with 'apt-get install libllvm19'")
+        if requested.startswith("cuda") and not _cuda_usable():
+            raise VariantError(f"variant {requested!r} needs an NVIDIA GPU and driver; none found")
+        if not _try_set(requested):
+            raise VariantError(f"variant {requested!r} is not available; choose one of: auto, {', '.join(mi.variants())}")
+        _selected = requested
+        return requested
+    for name in _AUTO_ORDER:
+        if name.startswith("cuda") and not _cuda_usable():
+            continue
+        if name.startswith("llvm") and not llvm:
+            continue
+        if _try_set(name):
+            if name.startswith("scalar"):
+                warnings.warn(
+                    "seahaze: no GPU and no libLLVM >= 16 found; rendering with the slow scalar_rgb variant "
+                    "(install libllvm19 for the fast llvm_ad_rgb variant)",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+            _selected = name
+            return name
+    raise VariantError("no Mitsuba variant could be activated")

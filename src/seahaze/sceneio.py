@@ -1,0 +1,231 @@
+"""Read scene YAML files into validated :class:`~seahaze.spec.SceneSpec` objects.
+
+Every problem is reported at once, each with ``file:line``, the dotted field and what is
+allowed, so a user fixes a file in one pass. Unknown keys and duplicate keys are errors.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+from pydantic import BaseModel, ValidationError
+
+from .spec import SceneSpec
+
+Loc = tuple[str | int, ...]
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One thing wrong with a scene file."""
+
+    file: str
+    line: int
+    field: str
+    message: str
+
+    def __str__(self) -> str:
+        where = f"{self.file}:{self.line}" if self.line else self.file
+        return f"{where}: {self.field or '(file)'}: {self.message}"
+
+
+class SceneFileError(Exception):
+    """A scene file that cannot be used; ``problems`` lists every issue found."""
+
+    def __init__(self, problems: list[Problem]):
+        self.problems = problems
+        super().__init__("\n".join(str(p) for p in problems))
+
+
+def _index_lines(node: yaml.Node, loc: Loc, lines: dict[Loc, int], dupes: list[tuple[Loc, int]]) -> None:
+    """Record the 1-based line of every mapping key and sequence item, and duplicate keys."""
+    lines.setdefault(loc, node.start_mark.line + 1)
+    if isinstance(node, yaml.MappingNode):
+        seen: set[str] = set()
+        for key_node, value_node in node.value:
+            key = str(key_node.value)
+            child = (*loc, key)
+            if key in seen:
+                dupes.append((child, key_node.start_mark.line + 1))
+            seen.add(key)
+            lines[child] = key_node.start_mark.line + 1
+            _index_lines(value_node, child, lines, dupes)
+    elif isinstance(node, yaml.SequenceNode):
+        for i, item in enumerate(node.value):
+            _index_lines(item, (*loc, i), lines, dupes)
+
+
+def _line_for(loc: Loc, lines: dict[Loc, int]) -> int:
+    """The line of the deepest part of ``loc`` present in the file (0 if none)."""
+    for end in range(len(loc), -1, -1):
+        if loc[:end] in lines:
+            return lines[loc[:end]]
+    return 0
+
+
+def _field_info(loc: Loc):
+    """The pydantic FieldInfo at ``loc`` inside SceneSpec, or None where it is not a field."""
+    model: type[BaseModel] | None = SceneSpec
+    info = None
+    for part in loc:
+        if model is None or not isinstance(part, str):
+            continue
+        fields = model.model_fields
+        name = next((n for n, f in fields.items() if part in (n, f.alias)), None)
+        if name is None:
+            return None
+        info = fields[name]
+        annotation = info.annotation
+        model = _model_in(annotation)
+    return info
+
+
+def _model_in(annotation: Any) -> type[BaseModel] | None:
+    """The BaseModel class inside an annotation such as ``Model | None`` or ``list[Model]``."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in getattr(annotation, "__args__", ()):
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def _allowed(loc: Loc) -> str:
+    """Human text of what a field allows: range and unit, from the schema itself."""
+    info = _field_info(loc)
+    if info is None:
+        return ""
+    bounds = []
+    for meta in info.metadata:
+        for attr, sym in (("ge", ">="), ("gt", ">"), ("le", "<="), ("lt", "<")):
+            value = getattr(meta, attr, None)
+            if value is not None:
+                bounds.append(f"{sym} {value:g}" if isinstance(value, float | int) else f"{sym} {value}")
+    extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
+    unit = extra.get("unit")
+    parts = []
+    if bounds:
+        parts.append(" and ".join(bounds))
+    if unit and unit != "1":
+        parts.append(f"in {unit}")
+    return f" (allowed: {', '.join(parts)})" if parts else ""
+
+
+def _dotted(loc: Loc) -> str:
+    text = ""
+    for part in loc:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
+    return text
+
+
+def _allowed_keys(loc: Loc) -> str:
+    """For an unknown key: the keys its section does allow."""
+    parent = _model_in(_field_info(loc[:-1]).annotation) if len(loc) > 1 and _field_info(loc[:-1]) else SceneSpec
+    if parent is None:
+        return ""
+    keys = [f.alias or n for n, f in parent.model_fields.items()]
+    return f"; allowed keys: {', '.join(keys)}"
+
+
+def _problems_from_validation(err: ValidationError, file: str, lines: dict[Loc, int]) -> list[Problem]:
+    problems = []
+    for item in err.errors():
+        loc = tuple(p for p in item["loc"] if not (isinstance(p, str) and p.startswith("function-")))
+        # pydantic puts the union member name in loc for `float | Literal[...]`; drop such parts.
+        loc = tuple(p for p in loc if not (isinstance(p, str) and ("[" in p or p in ("float", "int", "str"))))
+        if item["type"] == "extra_forbidden":
+            message = f"unknown key '{loc[-1]}'{_allowed_keys(loc)}"
+        else:
+            message = item["msg"].replace("Value error, ", "") + _allowed(loc)
+        problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), message))
+    # Several union branches can report the same place; keep one message per place and text.
+    unique = list(dict.fromkeys(problems))
+    return unique
+
+
+def _reject_non_finite(data: Any, loc: Loc, lines: dict[Loc, int], file: str) -> list[Problem]:
+    """YAML accepts .nan and .inf as floats; no scene field means them."""
+    if isinstance(data, float) and not math.isfinite(data):
+        return [Problem(file, _line_for(loc, lines), _dotted(loc), f"{data} is not a finite number")]
+    if isinstance(data, dict):
+        return [p for k, v in data.items() for p in _reject_non_finite(v, (*loc, str(k)), lines, file)]
+    if isinstance(data, list):
+        return [p for i, v in enumerate(data) for p in _reject_non_finite(v, (*loc, i), lines, file)]
+    return []
+
+
+def parse_scene_text(text: str, file: str = "<scene>") -> SceneSpec:
+    """Validate YAML text into a SceneSpec; raises :class:`SceneFileError` listing every problem."""
+    try:
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        line = mark.line + 1 if mark is not None else 0
+        reason = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise SceneFileError([Problem(file, line, "", f"not valid YAML: {reason}")]) from None
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise SceneFileError([Problem(file, 1, "", f"a scene is a mapping of sections, got {type(data).__name__}")])
+    lines: dict[Loc, int] = {}
+    dupes: list[tuple[Loc, int]] = []
+    if node is not None:
+        _index_lines(node, (), lines, dupes)
+    problems = [Problem(file, line, _dotted(loc), "duplicate key (the later value would silently win)") for loc, line in dupes]
+    problems += _reject_non_finite(data, (), lines, file)
+    try:
+        spec = SceneSpec.model_validate(data)
+    except ValidationError as err:
+        problems += _problems_from_validation(err, file, lines)
+        spec = None
+    if spec is not None:
+        problems += _check_vessel_classes(spec, file, lines)
+    if problems:
+        raise SceneFileError(sorted(problems, key=lambda p: p.line))
+    assert spec is not None
+    return spec
+
+
+def _check_vessel_classes(spec: SceneSpec, file: str, lines: dict[Loc, int]) -> list[Problem]:
+    """Vessel classes are checked against the library, which the schema cannot know."""
+    from .vessels import CLASS_NAMES, VESSEL_CLASSES
+
+    allowed = ", ".join(CLASS_NAMES)
+    problems = []
+    for i, vessel in enumerate(spec.vessels.placed):
+        loc: Loc = ("vessels", "placed", i, "class")
+        if vessel.kind not in CLASS_NAMES:
+            problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), f"unknown vessel class '{vessel.kind}'; allowed: {allowed}"))
+            continue
+        lo, hi = VESSEL_CLASSES[vessel.kind].length_range_m
+        if vessel.length_m is not None and not lo <= vessel.length_m <= hi:
+            loc = ("vessels", "placed", i, "length_m")
+            problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), f"{vessel.length_m:g} m is outside the {vessel.kind} range (allowed: {lo:g} to {hi:g} m)"))
+    sampler = spec.vessels.sample
+    for kind in (sampler.classes or {}) if sampler else {}:
+        if kind not in CLASS_NAMES:
+            loc = ("vessels", "sample", "classes", kind)
+            problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), f"unknown vessel class '{kind}'; allowed: {allowed}"))
+    return problems
+
+
+def load_scene(path: str | Path) -> tuple[SceneSpec, str]:
+    """Load and validate a scene file; returns the spec and the scene name.
+
+    Raises :class:`SceneFileError` for a missing, unreadable or invalid file.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneFileError([Problem(str(path), 0, "", "no such file")]) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneFileError([Problem(str(path), 0, "", f"cannot read: {exc}")]) from None
+    spec = parse_scene_text(text, str(path))
+    return spec, spec.name or path.stem
