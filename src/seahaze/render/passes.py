@@ -57,7 +57,8 @@ def render_geometry(loaded: LoadedScene) -> GeometryPass:
     idx = dr.arange(mi.UInt32, width * height)
     px = mi.Point2f((mi.Float(idx % width) + 0.5) / width, (mi.Float(idx // width) + 0.5) / height)
     ray, _ = sensor.sample_ray(0.0, 0.5, px, mi.Point2f(0.5, 0.5))
-    origin = np.array([ray.o.x[0], ray.o.y[0], ray.o.z[0]], dtype=np.float64)
+    # Rays start on the near-clip plane; distances are measured from the camera centre.
+    origin = cam.origin
     directions = np.stack([np.array(ray.d.x), np.array(ray.d.y), np.array(ray.d.z)], axis=-1)
 
     box_id = next(k for k, v in loaded.shape_ids.items() if v == -2)

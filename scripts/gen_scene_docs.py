@@ -1,0 +1,123 @@
+"""Generate docs/scenes.md, the scene YAML reference, from the schema in seahaze.spec.
+
+Run ``make docs`` (or this script) after changing the schema; a test checks the committed file
+is up to date, so the reference cannot drift from the code.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+from pydantic import BaseModel
+from pydantic_core import PydanticUndefined
+
+from seahaze.spec import SceneSpec
+
+OUT = Path(__file__).resolve().parents[1] / "docs" / "scenes.md"
+
+INTRO = """# Scene YAML reference
+
+A scene file describes one scene: camera, sun, sky, sea, vessels, haze and render settings.
+Every section and key is optional; unknown keys are errors (`seahaze validate SCENE.yaml` lists
+every problem with its line). World frame: Z up, metres, sea level at z = 0, the camera above
+the origin; azimuths and headings are degrees counter-clockwise from +x seen from above.
+
+This page is generated from `src/seahaze/spec.py` by `scripts/gen_scene_docs.py`; do not edit it
+by hand.
+
+Example (`scenes/default.yaml`):
+
+```yaml
+{example}
+```
+"""
+
+
+def _model_of(annotation: Any) -> type[BaseModel] | None:
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in getattr(annotation, "__args__", ()):
+        found = _model_of(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def _type_name(annotation: Any) -> str:
+    text = getattr(annotation, "__name__", None) if isinstance(annotation, type) else None
+    text = text or str(annotation)
+    for old, new in (("typing.", ""), ("Annotated[", ""), ("seahaze.spec.", ""), ("seahaze.visibility.", ""), ("NoneType", "null")):
+        text = text.replace(old, new)
+    if "Literal" in text:
+        return "one of " + ", ".join(f"`{a}`" for a in getattr(annotation, "__args__", ()) if isinstance(a, str)) or text
+    if "Threshold" in text:
+        return "one of `koschmieder`, `mor`"
+    if "tuple[" in text and "float" in text:
+        return "list of numbers"
+    if "tuple[" in text and "int" in text:
+        return "list of integers"
+    return text.split(",")[0].replace("[", "") if "Field" in text else text
+
+
+def _range(info) -> str:
+    parts = []
+    for meta in info.metadata:
+        for attr, sym in (("ge", "≥"), ("gt", ">"), ("le", "≤"), ("lt", "<")):
+            value = getattr(meta, attr, None)
+            if value is not None:
+                parts.append(f"{sym} {value:g}")
+    return ", ".join(parts)
+
+
+def _default(info) -> str:
+    if info.default is not PydanticUndefined:
+        value = info.default
+        if isinstance(value, tuple):
+            value = list(value)
+        return f"`{value}`" if value is not None else "—"
+    if info.default_factory is not None:
+        value = info.default_factory()
+        if isinstance(value, BaseModel):
+            return "(section)"
+        return f"`{value}`" if value not in ([], {}) else "`[]`"
+    return "required"
+
+
+def section(model: type[BaseModel], path: str) -> list[str]:
+    """Markdown for one section and, recursively, its sub-sections."""
+    lines = [f"## `{path}`" if path else "## Top level", "", (model.__doc__ or "").strip(), "",
+             "| key | type | unit | default | allowed | meaning |", "|---|---|---|---|---|---|"]
+    nested = []
+    for name, info in model.model_fields.items():
+        key = info.alias or name
+        sub = _model_of(info.annotation)
+        extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
+        unit = extra.get("unit", "")
+        kind = f"section `{sub.__name__}`" if sub else _type_name(info.annotation)
+        desc = (info.description or (sub.__doc__ or "").strip().splitlines()[0] if sub else info.description or "")
+        lines.append(f"| `{key}` | {kind} | {unit} | {_default(info)} | {_range(info)} | {desc} |")
+        if sub:
+            nested.append((sub, f"{path}.{key}" if path else key, "list" in str(info.annotation)))
+    lines.append("")
+    for sub, sub_path, is_list in nested:
+        lines += section(sub, f"{sub_path}[]" if is_list else sub_path)
+    return lines
+
+
+def render() -> str:
+    """The full text of docs/scenes.md."""
+    example = (OUT.parents[1] / "scenes" / "default.yaml").read_text().strip()
+    return INTRO.format(example=example) + "\n" + "\n".join(section(SceneSpec, "")) + "\n"
+
+
+def main() -> int:
+    OUT.parent.mkdir(parents=True, exist_ok=True)
+    OUT.write_text(render())
+    print(f"wrote {OUT}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,65 @@
+"""Shared fixtures: tiny scenes built straight from numpy, so render tests need no ocean or
+vessel library and every expected value can be computed analytically."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from seahaze.camera import Camera
+from seahaze.geometry import MeshData, SceneGeometry, VesselInstance
+from seahaze.spec import SceneSpec
+
+PLANE_HALF_SIZE_M = 2.0e5
+
+
+def flat_sea_mesh(rings: int = 96, sectors: int = 128) -> MeshData:
+    """The sea as a flat camera-centred polar grid at z = 0.
+
+    Ring radii grow geometrically from 0.5 m to PLANE_HALF_SIZE_M so that triangles stay small
+    relative to their distance: float32 hit points on one huge triangle are off by centimetres.
+    """
+    radii = np.geomspace(0.5, PLANE_HALF_SIZE_M, rings)
+    angles = np.linspace(0.0, 2.0 * np.pi, sectors, endpoint=False)
+    ring_xy = np.stack([np.outer(radii, np.cos(angles)), np.outer(radii, np.sin(angles))], axis=-1).reshape(-1, 2)
+    vertices = np.vstack([[0.0, 0.0, 0.0], np.column_stack([ring_xy, np.zeros(len(ring_xy))])]).astype(np.float32)
+    faces = [[0, 1 + s, 1 + (s + 1) % sectors] for s in range(sectors)]
+    for r in range(rings - 1):
+        for s in range(sectors):
+            a, b = 1 + r * sectors + s, 1 + r * sectors + (s + 1) % sectors
+            faces += [[a, a + sectors, b], [b, a + sectors, b + sectors]]
+    return MeshData("sea", vertices, np.array(faces, np.uint32))
+
+
+def box_vessel(index: int, center: tuple[float, float, float], size: tuple[float, float, float]) -> VesselInstance:
+    """An axis-aligned box standing in for a vessel (class id 0)."""
+    import trimesh
+
+    box = trimesh.creation.box(size)
+    box.apply_translation(center)
+    part = MeshData(f"vessel{index:03d}_hull", box.vertices.astype(np.float32), box.faces.astype(np.uint32), (0.3, 0.1, 0.1), 0.4)
+    return VesselInstance(index, "box", 0, None, size[0], size[1], size[2], 0.0, [part])
+
+
+def small_spec(**sections) -> SceneSpec:
+    """A SceneSpec with a tiny default resolution, overridden by ``sections``."""
+    data = {"camera": {"resolution": [64, 36]}, "render": {"spp": 4}}
+    for key, value in sections.items():
+        data.setdefault(key, {}).update(value)
+    return SceneSpec.model_validate(data)
+
+
+@pytest.fixture(scope="session")
+def mitsuba_variant() -> str:
+    from seahaze.render.variant import select_variant
+
+    return select_variant("auto")
+
+
+def load_flat_scene(spec: SceneSpec, vessels=(), visibilities=(1000.0,)):
+    """Load a Mitsuba scene with a flat sea and the given box vessels."""
+    from seahaze.render.mitsuba_scene import build_scene
+
+    camera = Camera.from_spec(spec.camera)
+    geometry = SceneGeometry(flat_sea_mesh(), 0.05, None, list(vessels))
+    return build_scene(spec, camera, geometry, list(visibilities)), camera
