@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 from . import __version__
+from .metric import cli as metric_cli
 from .visibility import (
     GRADED_LEVELS_M,
     Threshold,
@@ -151,12 +152,7 @@ def build_parser() -> argparse.ArgumentParser:
     classes = sub.add_parser("classes", help="list the vessel classes and their YOLO ids")
     classes.set_defaults(func=cmd_classes)
 
-    try:
-        from .metric import cli as metric_cli
-    except ImportError:  # the metric package is optional at import time only while developing
-        metric_cli = None
-    if metric_cli is not None:
-        metric_cli.register(sub)
+    metric_cli.register(sub)
     return parser
 
 

@@ -1,0 +1,328 @@
+"""Reading a seahaze dataset and YOLO-format label / prediction files for the metric.
+
+Dataset layout (written by the renderer)::
+
+    DIR/data.yaml                   # Ultralytics: names {0: container_ship, ...}, split per level
+    DIR/images/<level>/<scene>.png  # level: clean, v0300, v0400, ... (zero-padded metres)
+    DIR/labels/<level>/<scene>.txt  # 'class cx cy w h' normalised; an empty file = no objects
+
+A prediction folder mirrors the labels: ``PRED/<level>/<scene>.txt`` with
+``class cx cy w h conf`` lines, or ``PRED/<scene>.txt`` for a single level. A missing prediction
+file means no detections for that image.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+from PIL import Image, UnidentifiedImageError
+
+from seahaze.metric.errors import MetricInputError, located
+from seahaze.visibility import level_name
+
+CLEAN = "clean"
+"""Folder name of the haze-free level."""
+
+IMAGE_SUFFIXES: tuple[str, ...] = (".png", ".jpg", ".jpeg")
+"""Image files recognised in ``images/<level>/`` (the renderer writes PNG)."""
+
+_LEVEL = re.compile(r"^v(\d+)$")
+_LEVEL_ARG = re.compile(r"^v?(\d+(?:\.\d+)?)\s*(?:m)?$", re.IGNORECASE)
+_COORD_TOL = 1e-6  # normalised coordinates written with rounding may exceed [0, 1] by this much
+
+
+def level_visibility_m(level: str) -> float | None:
+    """Visibility (m) of a level folder: ``v0300`` → 300.0, ``clean`` → None.
+
+    Raises :class:`MetricInputError` for any other name.
+    """
+    if level == CLEAN:
+        return None
+    match = _LEVEL.match(level)
+    if not match or int(match[1]) <= 0:
+        raise MetricInputError(f"level {level!r} is not 'clean' or 'v' + metres (e.g. v0300)")
+    return float(int(match[1]))
+
+
+def is_level_name(name: str) -> bool:
+    """Whether ``name`` is a level folder name (``clean`` or ``v`` + a positive integer)."""
+    match = _LEVEL.match(name)
+    return name == CLEAN or (match is not None and int(match[1]) > 0)
+
+
+def parse_level(text: str) -> str:
+    """The level folder for a ``--level`` argument: ``800``, ``800m``, ``v800``, ``v0800`` →
+    ``v0800``; ``clean`` → ``clean``. Raises :class:`MetricInputError` otherwise."""
+    value = text.strip()
+    if value.lower() == CLEAN:
+        return CLEAN
+    match = _LEVEL_ARG.match(value)
+    if not match or float(match[1]) <= 0 or not float(match[1]).is_integer():
+        raise MetricInputError(
+            f"--level {text!r}: expected whole metres (800), a level folder (v0800) or 'clean'")
+    return level_name(float(match[1]))
+
+
+def _level_key(level: str) -> tuple[int, float]:
+    vis = level_visibility_m(level)
+    return (0, 0.0) if vis is None else (1, vis)
+
+
+def sort_levels(levels: Iterable[str]) -> list[str]:
+    """Level names ordered ``clean`` first, then by increasing visibility."""
+    return sorted(levels, key=_level_key)
+
+
+# --------------------------------------------------------------------------------------------
+# YOLO text files
+
+
+@dataclass(frozen=True)
+class YoloBox:
+    """One YOLO line: class id and a normalised centre/size box; ``conf`` for predictions."""
+
+    class_id: int
+    cx: float
+    cy: float
+    w: float
+    h: float
+    conf: float | None = None
+
+    def to_pixels(self, width: int, height: int) -> tuple[float, float, float, float]:
+        """The box as COCO ``[x_min, y_min, width, height]`` in pixels of a width×height image."""
+        return ((self.cx - self.w / 2) * width, (self.cy - self.h / 2) * height,
+                self.w * width, self.h * height)
+
+
+LABEL_FORMAT = "class cx cy w h"
+PRED_FORMAT = "class cx cy w h conf"
+
+
+def parse_yolo_line(text: str, num_classes: int, *, with_conf: bool) -> YoloBox:
+    """Parse one non-empty YOLO line; raise :class:`MetricInputError` (without location) saying
+    what is wrong and what is allowed."""
+    fields = text.split()
+    expected = 6 if with_conf else 5
+    fmt = PRED_FORMAT if with_conf else LABEL_FORMAT
+    if len(fields) != expected:
+        hint = (" (predictions need the confidence column; Ultralytics writes it with "
+                "save_conf=True)" if with_conf and len(fields) == 5 else "")
+        raise MetricInputError(
+            f"expected {expected} values '{fmt}', got {len(fields)}{hint}")
+    try:
+        class_id = int(fields[0])
+    except ValueError:
+        raise MetricInputError(
+            f"class must be an integer in 0..{num_classes - 1}, got {fields[0]!r}") from None
+    if not 0 <= class_id < num_classes:
+        raise MetricInputError(
+            f"class {class_id} out of range; data.yaml names {num_classes} classes "
+            f"(0..{num_classes - 1})")
+    values: list[float] = []
+    for name, raw in zip(fmt.split()[1:], fields[1:], strict=True):
+        try:
+            value = float(raw)
+        except ValueError:
+            raise MetricInputError(f"{name} must be a number, got {raw!r}") from None
+        if not math.isfinite(value) or not -_COORD_TOL <= value <= 1 + _COORD_TOL:
+            raise MetricInputError(f"{name} must be a number in [0, 1] (normalised), got {raw!r}")
+        values.append(value)
+    cx, cy, w, h = values[:4]
+    if not with_conf and (w <= 0 or h <= 0):
+        raise MetricInputError(f"box width and height must be > 0, got w={fields[3]} h={fields[4]}")
+    return YoloBox(class_id, cx, cy, w, h, values[4] if with_conf else None)
+
+
+def read_yolo_file(path: Path, num_classes: int, *, with_conf: bool) -> list[YoloBox]:
+    """All boxes of a YOLO label (``with_conf=False``) or prediction (``True``) file.
+
+    Blank lines are skipped; an empty file means no objects. Raises :class:`MetricInputError`
+    naming the file and line for anything malformed.
+    """
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise located(path, f"cannot read ({exc.__class__.__name__}); expected a text file "
+                            f"of '{PRED_FORMAT if with_conf else LABEL_FORMAT}' lines") from None
+    boxes: list[YoloBox] = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        if not line.strip():
+            continue
+        try:
+            boxes.append(parse_yolo_line(line, num_classes, with_conf=with_conf))
+        except MetricInputError as exc:
+            raise located(path, str(exc), number) from None
+    return boxes
+
+
+# --------------------------------------------------------------------------------------------
+# Dataset
+
+
+@dataclass(frozen=True)
+class Dataset:
+    """A seahaze dataset on disk: its root, class names and level folders."""
+
+    root: Path
+    names: tuple[str, ...]
+    levels: tuple[str, ...]
+    """Level folders under ``images/``: ``clean`` first, then by increasing visibility."""
+
+    def image_dir(self, level: str) -> Path:
+        """``root/images/<level>``."""
+        return self.root / "images" / level
+
+    def label_dir(self, level: str) -> Path:
+        """``root/labels/<level>``."""
+        return self.root / "labels" / level
+
+    @property
+    def hazy_levels(self) -> tuple[str, ...]:
+        """The levels with a visibility (all but ``clean``), by increasing visibility."""
+        return tuple(lv for lv in self.levels if lv != CLEAN)
+
+
+@dataclass(frozen=True)
+class ImageTruth:
+    """Ground truth of one image: scene name (file stem), pixel size and labelled boxes."""
+
+    name: str
+    width: int
+    height: int
+    boxes: tuple[YoloBox, ...]
+
+
+def _class_names(path: Path, doc: object) -> tuple[str, ...]:
+    names = doc.get("names") if isinstance(doc, dict) else None
+    if isinstance(names, list) and names:
+        return tuple(str(n) for n in names)
+    if isinstance(names, dict) and names:
+        keys = sorted(names, key=str)
+        if sorted(k for k in keys if isinstance(k, int)) != list(range(len(keys))):
+            raise located(path, "names must map the class ids 0..N-1 to names, got ids "
+                                f"{keys}")
+        return tuple(str(names[k]) for k in range(len(keys)))
+    raise located(path, "missing 'names' (a list or a {0: name, 1: ...} mapping of classes)")
+
+
+def load_dataset(root: Path | str) -> Dataset:
+    """Open a dataset folder: class names from ``data.yaml``, levels from ``images/``.
+
+    Raises :class:`MetricInputError` if ``data.yaml`` or ``images/`` is missing or unusable.
+    """
+    root = Path(root)
+    if not root.is_dir():
+        raise located(root, "dataset folder not found")
+    data_yaml = root / "data.yaml"
+    if not data_yaml.is_file():
+        raise located(data_yaml, "missing; a seahaze dataset has data.yaml, images/<level>/ "
+                                 "and labels/<level>/")
+    try:
+        doc = yaml.safe_load(data_yaml.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        raise located(data_yaml, f"cannot parse YAML ({exc.__class__.__name__})") from None
+    names = _class_names(data_yaml, doc)
+    images = root / "images"
+    if not images.is_dir():
+        raise located(images, "missing; expected one folder per level (clean, v0300, ...)")
+    levels = sort_levels(p.name for p in images.iterdir() if p.is_dir() and is_level_name(p.name))
+    if not levels:
+        raise located(images, "no level folders (clean, v0300, v0400, ...)")
+    return Dataset(root, names, tuple(levels))
+
+
+def _image_size(path: Path) -> tuple[int, int]:
+    try:
+        with Image.open(path) as img:  # reads the header only
+            return img.size
+    except (OSError, UnidentifiedImageError) as exc:
+        raise located(path, f"cannot read the image size ({exc.__class__.__name__}); "
+                            f"expected a PNG/JPEG image") from None
+
+
+def scene_images(dataset: Dataset, level: str) -> dict[str, Path]:
+    """Scene name → image path for a level. Raises if the level folder is missing, empty or
+    holds two images of the same scene."""
+    folder = dataset.image_dir(level)
+    if not folder.is_dir():
+        raise located(folder, f"level {level!r} not in the dataset (levels: "
+                              f"{', '.join(dataset.levels)})")
+    scenes: dict[str, Path] = {}
+    for path in sorted(folder.iterdir()):
+        if path.suffix.lower() not in IMAGE_SUFFIXES or not path.is_file():
+            continue
+        if path.stem in scenes:
+            raise located(path, f"scene {path.stem!r} has two images ({scenes[path.stem].name})")
+        scenes[path.stem] = path
+    if not scenes:
+        raise located(folder, f"no images ({', '.join(IMAGE_SUFFIXES)})")
+    return scenes
+
+
+def load_level_truth(dataset: Dataset, level: str) -> list[ImageTruth]:
+    """Ground truth of every image of a level, its size read from the image with Pillow.
+
+    Every image needs its label file (an empty one for no objects); a label without an image is
+    an error too, because either would silently change the score.
+    """
+    scenes = scene_images(dataset, level)
+    label_dir = dataset.label_dir(level)
+    if not label_dir.is_dir():
+        raise located(label_dir, f"missing; expected one '{LABEL_FORMAT}' file per image")
+    orphans = sorted(p.name for p in label_dir.glob("*.txt") if p.stem not in scenes)
+    if orphans:
+        raise located(label_dir / orphans[0], f"label without an image in "
+                                              f"{dataset.image_dir(level)}")
+    truth: list[ImageTruth] = []
+    for name, image in scenes.items():
+        label = label_dir / f"{name}.txt"
+        if not label.is_file():
+            raise located(label, f"missing label file for {image.name} (an empty file means "
+                                 "no objects)")
+        width, height = _image_size(image)
+        boxes = read_yolo_file(label, len(dataset.names), with_conf=False)
+        truth.append(ImageTruth(name, width, height, tuple(boxes)))
+    return truth
+
+
+def prediction_dir(pred_root: Path | str, level: str, *, allow_flat: bool) -> Path:
+    """The folder holding a level's prediction files: ``PRED/<level>/`` if it exists, else
+    ``PRED`` itself when ``allow_flat`` (a single-level folder, as given with ``--level``)."""
+    root = Path(pred_root)
+    if not root.is_dir():
+        raise located(root, "prediction folder not found")
+    if (root / level).is_dir():
+        return root / level
+    others = sorted(p.name for p in root.iterdir() if p.is_dir() and is_level_name(p.name))
+    if allow_flat and not others:
+        return root
+    if others:
+        raise located(root / level, f"missing, but {root} has folders for other levels "
+                                    f"({', '.join(sort_levels(others))})")
+    raise located(root / level, f"missing; predictions for level {level} go in "
+                                f"PRED/{level}/<scene>.txt")
+
+
+def load_predictions(folder: Path, scenes: Iterable[str],
+                     num_classes: int) -> Mapping[str, list[YoloBox]]:
+    """Scene → predicted boxes from ``folder/<scene>.txt`` (``class cx cy w h conf``).
+
+    A missing file is an image without detections. A ``.txt`` file whose scene is not in the
+    level is an error: a misnamed folder would otherwise score as "no detections".
+    """
+    wanted = set(scenes)
+    stray = sorted(p.name for p in folder.glob("*.txt") if p.stem not in wanted)
+    if stray:
+        raise located(folder / stray[0], f"prediction for a scene that is not in the level "
+                                         f"({len(stray)} such file(s)); file names must match "
+                                         "the image names")
+    out: dict[str, list[YoloBox]] = {}
+    for name in sorted(wanted):
+        path = folder / f"{name}.txt"
+        out[name] = read_yolo_file(path, num_classes, with_conf=True) if path.is_file() else []
+    return out
