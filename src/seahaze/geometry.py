@@ -96,7 +96,8 @@ def layout_vessels(spec: SceneSpec, camera: Camera) -> list[vessels.Placement]:
     if sampler is not None and sampler.count > 0:
         rng = np.random.default_rng(derived_seed(spec.render.seed, LAYOUT_SEED_STREAM, sampler.seed))
         weights = sampler.classes or dict.fromkeys(vessels.CLASS_NAMES, 1.0)
-        spread = sampler.bearing_spread_deg if sampler.bearing_spread_deg is not None else 0.45 * camera.fov_deg
+        # The spec gives a half-width; the layout takes the full width of the bearing range.
+        spread = 2.0 * sampler.bearing_spread_deg if sampler.bearing_spread_deg is not None else camera.fov_deg
         placements += vessels.sample_layout(
             count=sampler.count,
             class_weights=weights,
@@ -106,6 +107,7 @@ def layout_vessels(spec: SceneSpec, camera: Camera) -> list[vessels.Placement]:
             min_separation_m=sampler.min_separation_m,
             camera_heading_deg=camera.heading_deg,
             rng=rng,
+            horizontal_fov_deg=camera.fov_deg,
             existing=placements,
         )
     return placements

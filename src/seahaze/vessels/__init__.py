@@ -1,0 +1,48 @@
+"""Procedural vessel library, user meshes and sea layouts (trimesh + numpy, no renderer).
+
+Vessel frame: x forward (bow toward +x), y to port, z up, waterline z = 0, origin at
+midships on the waterline; metres. See :mod:`seahaze.vessels.library` for the class table
+with dimension ranges and sources, :mod:`seahaze.vessels.layout` for the placement frame.
+"""
+
+from seahaze.vessels.layout import (
+    DISTRIBUTIONS,
+    ExplicitVessel,
+    LayoutError,
+    PlacedPart,
+    Placement,
+    place_explicit,
+    place_on_sea,
+    sample_layout,
+)
+from seahaze.vessels.library import (
+    CLASS_NAMES,
+    VESSEL_CLASSES,
+    VesselClass,
+    build_vessel,
+    class_id,
+)
+from seahaze.vessels.materials import Material
+from seahaze.vessels.model import VesselModel, VesselPart
+from seahaze.vessels.user_mesh import SUPPORTED_FORMATS, load_user_mesh
+
+__all__ = [
+    "CLASS_NAMES",
+    "DISTRIBUTIONS",
+    "SUPPORTED_FORMATS",
+    "VESSEL_CLASSES",
+    "ExplicitVessel",
+    "LayoutError",
+    "Material",
+    "PlacedPart",
+    "Placement",
+    "VesselClass",
+    "VesselModel",
+    "VesselPart",
+    "build_vessel",
+    "class_id",
+    "load_user_mesh",
+    "place_explicit",
+    "place_on_sea",
+    "sample_layout",
+]

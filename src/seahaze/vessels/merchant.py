@@ -1,0 +1,566 @@
+"""Large merchant ships: container ship, bulk carrier, tanker and passenger (ro-pax) ferry.
+
+Every builder receives principal dimensions already sampled inside the class ranges (see
+:mod:`seahaze.vessels.library`) and samples the remaining proportions from ``rng`` inside
+the ranges written next to each draw. Metres throughout.
+
+Proportions follow common naval-architecture practice for these types:
+
+- bridge visibility: SOLAS V/22.1.1 requires that the sea surface is visible from the
+  conning position no more than two ship lengths or 500 m (the lesser) ahead of the bow;
+  container stacks forward of an aft bridge are capped by that sight line below.
+- ISO 668 container: 12.19 m (40 ft) long, 2.44 m wide, 2.59 m (8 ft 6 in) high.
+- deck heights of accommodation: about 2.8 m per deck.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from seahaze.vessels.geometry import HullForm, box
+from seahaze.vessels.materials import (
+    ANTIFOULING_REDS,
+    CONTAINER_COLOURS,
+    DECK_PAINTS,
+    FUNNEL_PAINTS,
+    HULL_PAINTS_CARGO,
+    MACHINERY_PAINTS,
+    SUPERSTRUCTURE_WHITES,
+    WINDOW_GLASS,
+    Material,
+    material_from_srgb8,
+    pick_material,
+)
+from seahaze.vessels.model import VesselPart
+from seahaze.vessels.parts import EMBED_M, PartSet, PrincipalDims, deck_range, min_half_beam, u
+
+__all__ = [
+    "build_bulk_carrier",
+    "build_container_ship",
+    "build_passenger_ferry",
+    "build_tanker",
+]
+
+CONTAINER_LENGTH_M = 12.19
+CONTAINER_WIDTH_M = 2.44
+CONTAINER_HEIGHT_M = 2.59
+DECK_HEIGHT_M = 2.8
+LIFEBOAT_ORANGE = material_from_srgb8("lifeboat_orange", (235, 100, 20), 0.5)
+
+
+def _sight_line_limit(
+    eye_x: float, eye_z: float, bow_x: float, length: float
+) -> Callable[[float], float]:
+    """Highest allowed top (m) at ``x`` so the sea is visible min(2L, 500 m) ahead (SOLAS)."""
+    sea_x = bow_x + min(2.0 * length, 500.0)
+
+    def limit(x: float) -> float:
+        return eye_z * (sea_x - x) / (sea_x - eye_x)
+
+    return limit
+
+
+def _merchant_hull(d: PrincipalDims, rng: np.random.Generator, *, fullness: float) -> HullForm:
+    """Cargo-ship hull: parallel middle body, raked stem, forecastle, transom counter stern.
+
+    ``fullness`` in [0, 1] goes from a fine container-ship entrance to a bluff bulker bow.
+    """
+    return HullForm(
+        length=d.length,
+        beam=d.beam,
+        draft=d.draft,
+        freeboard=d.freeboard,
+        sheer_fwd=u(rng, 0.04, 0.1) * d.depth,
+        sheer_aft=u(rng, 0.0, 0.03) * d.depth,
+        forecastle_height=u(rng, 2.3, 3.0),
+        forecastle_length=u(rng, 0.06, 0.09) * d.length,
+        parallel_fwd=u(rng, 0.1, 0.25) + 0.2 * fullness,
+        parallel_aft=u(rng, 0.15, 0.3) + 0.1 * fullness,
+        # Deck planform: blunt, so a flared bow still carries containers / a forecastle;
+        # the waterline stays fine through bow_flare.
+        entrance_exponent=u(rng, 2.3, 2.9) + 0.8 * fullness,
+        bow_roundness=1.0 + 0.4 * fullness,
+        transom_width=u(rng, 0.7, 0.88),
+        stem_rake=u(rng, 0.018, 0.035),
+        stem_exponent=0.5,
+        stern_cutup=u(rng, 0.08, 0.12),
+        transom_immersion=u(rng, -0.15, 0.15),
+        section_exponent=7.0,
+        bow_flare=u(rng, 0.35, 0.5) - 0.15 * fullness,
+    )
+
+
+def _boot_top(d: PrincipalDims) -> float:
+    """Antifouling top (m above the current waterline): the design load line at ~72 % depth.
+
+    A ship in ballast floats high and shows its red bottom; a laden one shows a thin band.
+    """
+    return max(0.3, 0.72 * d.depth - d.draft + 0.3)
+
+
+def _foremast(parts: PartSet, form: HullForm, paint: Material, rng: np.random.Generator) -> None:
+    x = form.half_length - u(rng, 0.025, 0.04) * form.length
+    z0 = float(form.deck_z(np.array([x]))[0])
+    parts.add_mast(
+        x,
+        0.0,
+        z0,
+        u(rng, 0.03, 0.05) * form.length,
+        max(0.25, 0.0015 * form.length),
+        paint,
+        yard_half_width=0.6,
+    )
+
+
+def _aft_house(
+    parts: PartSet,
+    form: HullForm,
+    rng: np.random.Generator,
+    *,
+    n_decks: int,
+    paint: Material,
+    funnel: Material,
+    soot: Material,
+) -> tuple[float, float, float]:
+    """Aft accommodation + funnel of bulk carriers and tankers. Returns (x_aft, x_fwd, z_bridge
+    roof)."""
+    length, beam = form.length, form.beam
+    x_aft = -form.half_length + u(rng, 0.035, 0.06) * length
+    house_len = max(12.0, u(rng, 0.07, 0.1) * length)
+    x_fwd = x_aft + house_len
+    half_w = min(u(rng, 0.3, 0.4) * beam, min_half_beam(form, x_aft, x_fwd) - 0.5)
+    z_roof, z_top = parts.add_accommodation(
+        form,
+        x_aft,
+        x_fwd,
+        half_w,
+        n_decks,
+        DECK_HEIGHT_M,
+        wing_half_width=0.5 * beam,
+        wheelhouse_length=u(rng, 0.35, 0.5) * house_len,
+        paint=paint,
+        glass=WINDOW_GLASS[0],
+    )
+    f_half_len = u(rng, 0.12, 0.18) * house_len
+    parts.add_funnel(
+        x_aft + f_half_len + u(rng, 0.5, 2.0),
+        0.0,
+        f_half_len,
+        u(rng, 0.12, 0.2) * beam,
+        z_roof,
+        z_top + u(rng, 3.0, 7.0),
+        rake=u(rng, 0.5, 2.0),
+        paint=funnel,
+        top=soot,
+    )
+    parts.add_mast(
+        x_fwd - 0.3 * house_len,
+        0.0,
+        z_top,
+        u(rng, 4.0, 7.0),
+        0.3,
+        paint,
+        yard_half_width=2.0,
+        name="radar_mast",
+    )
+    return x_aft, x_fwd, z_top
+
+
+def build_container_ship(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
+    """Cellular container ship: long hull, tiers of ISO boxes, tall accommodation + funnel.
+
+    Bridge aft (feeder to Panamax) or, for ships over 280 m, often forward at ~1/3 L from the
+    bow with the funnel aft (typical of ULCVs since ~2010).
+    """
+    form = _merchant_hull(d, rng, fullness=0.0)
+    hull = pick_material(HULL_PAINTS_CARGO, rng)
+    white = pick_material(SUPERSTRUCTURE_WHITES, rng)
+    funnel = pick_material(FUNNEL_PAINTS, rng)
+    soot = FUNNEL_PAINTS[0]
+    parts = PartSet()
+    parts.add_hull(
+        form,
+        hull,
+        bottom=pick_material(ANTIFOULING_REDS, rng),
+        boot_top_z=_boot_top(d),
+        deck=pick_material(DECK_PAINTS, rng),
+    )
+
+    length, beam = d.length, d.beam
+    coaming = u(rng, 1.5, 2.2)
+    # On-deck tiers grow with size: 3-4 on a 100 m feeder, 8-9 on a 400 m ULCV.
+    max_tiers = int(np.clip(round(4 + (length - 100.0) / 60.0 + rng.integers(-1, 1)), 3, 10))
+    stack_top = float(form.deck_z(np.array([0.0]))[0]) + coaming + max_tiers * CONTAINER_HEIGHT_M
+
+    bridge_forward = length > 280.0 and rng.random() < 0.6
+    house_len = max(10.0, u(rng, 0.04, 0.055) * length)
+    if bridge_forward:
+        x_fwd = form.half_length - u(rng, 0.3, 0.36) * length
+    else:
+        x_fwd = -form.half_length + u(rng, 0.06, 0.25) * length + house_len
+    x_aft = x_fwd - house_len
+    z_deck, _ = deck_range(form, x_aft, x_fwd)
+    bridge_floor = stack_top + u(rng, 2.5, 5.0)
+    n_decks = max(2, int(np.ceil((bridge_floor - z_deck) / DECK_HEIGHT_M)))
+    half_w = min(u(rng, 0.28, 0.4) * beam, min_half_beam(form, x_aft, x_fwd) - 0.5)
+    z_roof, z_top = parts.add_accommodation(
+        form,
+        x_aft,
+        x_fwd,
+        half_w,
+        n_decks,
+        DECK_HEIGHT_M,
+        wing_half_width=0.5 * beam,
+        wheelhouse_length=u(rng, 0.5, 0.8) * house_len,
+        paint=white,
+        glass=WINDOW_GLASS[0],
+    )
+    parts.add_mast(
+        x_fwd - 0.4 * house_len,
+        0.0,
+        z_top,
+        u(rng, 4.0, 8.0),
+        0.35,
+        white,
+        yard_half_width=2.5,
+        name="radar_mast",
+    )
+
+    keep_out = [(x_aft - 1.0, x_fwd + 1.0)]
+    if bridge_forward:
+        f_len = u(rng, 0.025, 0.035) * length
+        f_x = -form.half_length + u(rng, 0.12, 0.16) * length
+        f_z0, _ = deck_range(form, f_x - f_len, f_x + f_len)
+        parts.add_funnel(
+            f_x,
+            0.0,
+            f_len,
+            u(rng, 0.12, 0.2) * beam,
+            f_z0,
+            stack_top + u(rng, 3.0, 8.0),
+            rake=u(rng, 0.5, 2.0),
+            paint=funnel,
+            top=soot,
+        )
+        keep_out.append((f_x - f_len - 2.0, f_x + f_len + 2.0))
+    else:
+        f_half = u(rng, 0.15, 0.22) * house_len
+        parts.add_funnel(
+            x_aft + f_half + 0.5,
+            0.0,
+            f_half,
+            u(rng, 0.1, 0.16) * beam,
+            z_roof,
+            z_top + u(rng, 2.0, 6.0),
+            rake=u(rng, 0.5, 2.0),
+            paint=funnel,
+            top=soot,
+        )
+
+    eye_z = z_top - 1.0 + 1.7
+    sight = _sight_line_limit(x_fwd, eye_z, form.half_length, length)
+    _add_container_stacks(parts, form, rng, coaming, max_tiers, keep_out, sight)
+    _foremast(parts, form, white, rng)
+    return parts.to_parts()
+
+
+def _add_container_stacks(
+    parts: PartSet,
+    form: HullForm,
+    rng: np.random.Generator,
+    coaming: float,
+    max_tiers: int,
+    keep_out: list[tuple[float, float]],
+    sight_limit: Callable[[float], float],
+) -> None:
+    """Fill the deck with 40 ft bays, two stacks across, random tiers and liveries.
+
+    Each stack is one box (its top silhouette is what matters at a few pixels per metre);
+    bays are separated by lashing-bridge gaps so no two boxes share a vertex.
+    """
+    x_front = form.half_length - form.forecastle_length - 2.0
+    x_end = -form.half_length + 0.05 * form.length
+    gap = u(rng, 0.8, 1.4)
+    x1 = x_front
+    while x1 - CONTAINER_LENGTH_M > x_end:
+        x0 = x1 - CONTAINER_LENGTH_M
+        bay = (x0, x1)
+        blocked = [a for a, b in keep_out if bay[1] > a and bay[0] < b]
+        if blocked:
+            x1 = min(blocked) - gap  # restart the bay grid right behind the obstacle
+            continue
+        x1 = x0 - gap
+        half_avail = min_half_beam(form, *bay) - 0.5
+        rows = int(2.0 * half_avail // (CONTAINER_WIDTH_M + 0.06))
+        if rows < 1:
+            continue
+        width = rows * (CONTAINER_WIDTH_M + 0.06)
+        z_base = deck_range(form, *bay)[1] + coaming
+        blocks = (
+            [(-0.5 * width, -0.15), (0.15, 0.5 * width)]
+            if rows >= 6
+            else [(-0.5 * width, 0.5 * width)]
+        )
+        for y0, y1 in blocks:
+            if rng.random() < 0.06:
+                continue  # an empty stack, common on partly loaded ships
+            tiers = max_tiers - int(rng.choice(3, p=(0.5, 0.35, 0.15)))
+            allowed = int((sight_limit(bay[1]) - z_base) // CONTAINER_HEIGHT_M)
+            tiers = min(tiers, allowed)
+            if tiers < 1:
+                continue
+            colour = pick_material(CONTAINER_COLOURS, rng, jitter=0.0)
+            parts.add(
+                f"containers_{colour.name.removeprefix('container_')}",
+                box(x0, bay[1], y0, y1, z_base - 0.5, z_base + tiers * CONTAINER_HEIGHT_M),
+                colour,
+            )
+        # Hatch cover under the stacks (also visible where a stack is missing).
+        z_deck = deck_range(form, *bay)[0]
+        parts.add(
+            "hatch_covers",
+            box(x0 - 0.2, bay[1] + 0.2, -0.5 * width, 0.5 * width, z_deck - EMBED_M, z_base - 0.6),
+            DECK_PAINTS[2],
+        )
+
+
+def build_bulk_carrier(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
+    """Bulk carrier: bluff hull, aft accommodation + funnel, a row of raised hatch covers and,
+    on geared Handysize/Supramax ships, four deck cranes between the hatches."""
+    form = _merchant_hull(d, rng, fullness=1.0)
+    hull = pick_material(HULL_PAINTS_CARGO, rng)
+    white = pick_material(SUPERSTRUCTURE_WHITES, rng)
+    deck = pick_material(DECK_PAINTS, rng)
+    parts = PartSet()
+    parts.add_hull(
+        form, hull, bottom=pick_material(ANTIFOULING_REDS, rng), boot_top_z=_boot_top(d), deck=deck
+    )
+    n_decks = int(np.clip(round(3 + d.length / 90.0 + rng.integers(0, 2)), 4, 8))
+    _, x_house_fwd, _ = _aft_house(
+        parts,
+        form,
+        rng,
+        n_decks=n_decks,
+        paint=white,
+        funnel=pick_material(FUNNEL_PAINTS, rng),
+        soot=FUNNEL_PAINTS[0],
+    )
+
+    length, beam = d.length, d.beam
+    x_first = x_house_fwd + 0.025 * length
+    x_last = form.half_length - form.forecastle_length - 0.02 * length
+    n_holds = int(np.clip(round(length / 33.0), 4, 9))
+    pitch = (x_last - x_first) / n_holds
+    cover_len = u(rng, 0.65, 0.75) * pitch
+    cover_paint = hull if rng.random() < 0.5 else deck
+    cover_h = u(rng, 1.8, 2.6) + 0.006 * length  # coaming + cover: ~2.5 m small, ~4 m Capesize
+    centres = [x_first + (i + 0.5) * pitch for i in range(n_holds)]
+    for xc in centres:
+        x0, x1 = xc - 0.5 * cover_len, xc + 0.5 * cover_len
+        hw = min(u(rng, 0.25, 0.31) * beam, min_half_beam(form, x0, x1) - 1.0)
+        z0, z1 = deck_range(form, x0, x1)
+        parts.add_block(
+            "hatch_covers",
+            cover_paint,
+            x0,
+            x1,
+            hw,
+            z0 - EMBED_M,
+            z1 + cover_h,
+            top_inset=0.15 * hw,
+            front_rake=0.3,
+            aft_rake=0.3,
+        )
+
+    geared = length < 235.0 and rng.random() < 0.6
+    if geared:
+        crane_paint = pick_material(MACHINERY_PAINTS, rng)
+        ped_h, ped_r = u(rng, 8.0, 11.0), u(rng, 1.3, 1.8)
+        # Jibs all point the same way and are shorter than the crane spacing so they never
+        # cross (stowed on their rests, or slewed fore-aft while working).
+        jib = float(np.clip(u(rng, 0.1, 0.13) * length, 15.0, 32.0))
+        jib = min(jib, 0.85 * pitch)
+        direction = 1.0 if rng.random() < 0.5 else -1.0
+        elevation = u(rng, 10.0, 35.0)
+        for i in range(min(4, n_holds - 1)):
+            xc = 0.5 * (centres[i] + centres[i + 1])
+            z0, _ = deck_range(form, xc - 1, xc + 1)
+            parts.add_crane(xc, 0.0, z0, ped_h, ped_r, jib, elevation, direction, crane_paint)
+    _foremast(parts, form, white, rng)
+    return parts.to_parts()
+
+
+def build_tanker(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
+    """Oil/product tanker: long low flush deck, aft house + funnel, centreline pipe rack and
+    catwalk, manifold cranes amidships."""
+    form = _merchant_hull(d, rng, fullness=0.7)
+    hull = pick_material(HULL_PAINTS_CARGO, rng)
+    white = pick_material(SUPERSTRUCTURE_WHITES, rng)
+    deck = pick_material(DECK_PAINTS, rng)
+    parts = PartSet()
+    parts.add_hull(
+        form, hull, bottom=pick_material(ANTIFOULING_REDS, rng), boot_top_z=_boot_top(d), deck=deck
+    )
+    n_decks = int(np.clip(round(3 + d.length / 80.0 + rng.integers(0, 2)), 4, 8))
+    _, x_house_fwd, _ = _aft_house(
+        parts,
+        form,
+        rng,
+        n_decks=n_decks,
+        paint=white,
+        funnel=pick_material(FUNNEL_PAINTS, rng),
+        soot=FUNNEL_PAINTS[0],
+    )
+    length, beam = d.length, d.beam
+    x0 = x_house_fwd + 1.0
+    x1 = form.half_length - form.forecastle_length - 1.0
+    z0, z1 = deck_range(form, x0, x1)
+    rack_hw = max(1.0, u(rng, 0.04, 0.06) * beam)
+    parts.add_block("pipe_rack", deck, x0, x1, rack_hw, z0 - EMBED_M, z1 + u(rng, 1.2, 2.0))
+    catwalk_z = z1 + u(rng, 2.4, 3.0)
+    parts.add("pipe_rack", box(x0, x1, -0.6, 0.6, catwalk_z - 0.3, catwalk_z), deck)
+    crane_paint = pick_material(MACHINERY_PAINTS, rng)
+    xc = u(rng, -0.05, 0.05) * length
+    zc, _ = deck_range(form, xc - 1, xc + 1)
+    for side in (-1.0, 1.0):
+        parts.add_crane(
+            xc,
+            side * 0.3 * beam,
+            zc,
+            u(rng, 6.0, 8.0),
+            0.9,
+            u(rng, 12.0, 18.0),
+            u(rng, 15, 35),
+            side,
+            crane_paint,
+        )
+    _foremast(parts, form, white, rng)
+    return parts.to_parts()
+
+
+def build_passenger_ferry(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
+    """Passenger / ro-pax ferry: high white superstructure over most of the length in stepped
+    tiers with window bands, bridge at the front of the top tier, one or two funnels aft,
+    lifeboats along the sides on larger ships."""
+    length, beam = d.length, d.beam
+    form = HullForm(
+        length=length,
+        beam=beam,
+        draft=d.draft,
+        freeboard=d.freeboard,
+        sheer_fwd=u(rng, 0.05, 0.15) * d.depth,
+        parallel_fwd=u(rng, 0.0, 0.2),
+        parallel_aft=u(rng, 0.1, 0.3),
+        entrance_exponent=u(rng, 1.8, 2.4),
+        bow_roundness=u(rng, 1.1, 1.4),
+        transom_width=u(rng, 0.85, 0.95),
+        stem_rake=u(rng, 0.05, 0.09),
+        stem_exponent=0.6,
+        stern_cutup=0.1,
+        transom_immersion=u(rng, 0.0, 0.3),
+        section_exponent=4.0,
+        bow_flare=u(rng, 0.25, 0.35),
+    )
+    white = pick_material(SUPERSTRUCTURE_WHITES, rng)
+    hull = white if rng.random() < 0.6 else pick_material(HULL_PAINTS_CARGO, rng)
+    stripe = pick_material(HULL_PAINTS_CARGO + ANTIFOULING_REDS, rng)
+    glass = WINDOW_GLASS[0]
+    parts = PartSet()
+    parts.add_hull(form, hull, bottom=stripe, boot_top_z=u(rng, 0.6, 0.45 * d.freeboard + 0.6))
+
+    n_tiers = int(np.clip(round(length / 35.0 + u(rng, 0.0, 1.5)), 1, 7))
+    tier_h = u(rng, 2.7, 3.1)
+    x_aft = -form.half_length + u(rng, 0.04, 0.12) * length
+    x_fwd = form.half_length - u(rng, 0.12, 0.2) * length
+    step_aft = u(rng, 0.0, 0.03) * length
+    step_fwd = u(rng, 0.005, 0.02) * length
+    z = deck_range(form, x_aft, x_fwd)[0]
+    narrow = 1.0
+    for k in range(n_tiers):
+        xa, xf = x_aft + k * step_aft, x_fwd - k * step_fwd
+        hw = narrow * (min_half_beam(form, xa, xf) - 0.15)
+        rake = 0.35 * tier_h
+        parts.add_block(
+            "superstructure", white, xa, xf, hw, z - EMBED_M, z + tier_h, front_rake=rake
+        )
+        parts.add_window_band(xa + 0.5, xf - rake - 0.5, hw, z + 0.9, z + 2.0, glass)
+        if k == 1 and length > 60.0 and rng.random() < 0.7:
+            _add_lifeboats(parts, xa, xf, hw, z, 0.5 * beam, rng)
+        z += tier_h
+        narrow *= 0.97
+    top_aft, top_fwd = x_aft + (n_tiers - 1) * step_aft, x_fwd - (n_tiers - 1) * step_fwd
+    bridge_len = max(3.0, u(rng, 0.03, 0.05) * length)
+    bx1 = top_fwd - 0.35 * tier_h - 0.3
+    wing = min(0.5 * beam, min_half_beam(form, bx1 - bridge_len, bx1))
+    parts.add_block(
+        "superstructure",
+        white,
+        bx1 - bridge_len,
+        bx1,
+        wing,
+        z - EMBED_M,
+        z + tier_h,
+        front_rake=0.5,
+    )
+    parts.add(
+        "windows",
+        box(bx1 - 0.8, bx1 + 0.05, -(wing - 0.3), wing - 0.3, z + 0.9, z + tier_h - 0.4),
+        glass,
+    )
+    z_top = z + tier_h
+    parts.add_mast(
+        bx1 - 0.5 * bridge_len,
+        0.0,
+        z_top,
+        u(rng, 3.0, 6.0),
+        0.2,
+        white,
+        yard_half_width=1.5,
+        name="radar_mast",
+    )
+
+    funnel = pick_material(FUNNEL_PAINTS, rng)
+    f_half_len = float(np.clip(u(rng, 0.03, 0.05) * length, 0.6, 8.0))
+    f_height = float(np.clip(u(rng, 0.03, 0.05) * length, 1.5, 10.0))
+    fx = top_aft + f_half_len + u(rng, 0.5, 0.1 * length)
+    twin = length > 90.0 and rng.random() < 0.5
+    ys = (-0.22 * beam, 0.22 * beam) if twin else (0.0,)
+    for y in ys:
+        parts.add_funnel(
+            fx,
+            y,
+            f_half_len,
+            u(rng, 0.06, 0.1) * beam,
+            z - tier_h,
+            z + f_height,
+            rake=u(rng, 0.3, 1.5),
+            paint=funnel,
+            top=FUNNEL_PAINTS[0],
+        )
+    return parts.to_parts()
+
+
+def _add_lifeboats(
+    parts: PartSet,
+    xa: float,
+    xf: float,
+    hw: float,
+    z: float,
+    half_beam: float,
+    rng: np.random.Generator,
+) -> None:
+    """SOLAS lifeboats (international orange) hung along both sides, inside the beam."""
+    boat_len = u(rng, 7.0, 9.0)
+    count = int(np.clip((xf - xa) // (boat_len * 2.5), 1, 4))
+    y_out = min(half_beam - 0.05, hw + 1.2)
+    y_in = y_out - 2.6
+    start = xa + 0.2 * (xf - xa)
+    for i in range(count):
+        x0 = start + i * boat_len * 1.6
+        for side in (-1.0, 1.0):
+            ya, yb = sorted((side * y_in, side * y_out))
+            parts.add(
+                "lifeboats", box(x0, x0 + boat_len, ya, yb, z + 0.3, z + 2.7), LIFEBOAT_ORANGE
+            )

@@ -1,0 +1,450 @@
+"""Small vessels: fishing boat (trawler / seiner), harbour tug, sailing yacht, speedboat.
+
+Builders receive principal dimensions sampled inside the class ranges (see
+:mod:`seahaze.vessels.library`) and draw the rest from ``rng`` inside the ranges written
+next to each draw. Metres throughout; vessel frame x forward, y port, z up, waterline z = 0.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from seahaze.vessels.geometry import (
+    HullForm,
+    box,
+    convex_body,
+    cylinder_between,
+    loft_hull,
+    tapered_block,
+    thin_triangle,
+    vertical_cylinder,
+)
+from seahaze.vessels.materials import (
+    ANTIFOULING_REDS,
+    FUNNEL_PAINTS,
+    HULL_PAINTS_CARGO,
+    HULL_PAINTS_SMALL,
+    MACHINERY_PAINTS,
+    SAIL_CLOTH,
+    SUPERSTRUCTURE_WHITES,
+    WINDOW_GLASS,
+    Material,
+    material_from_srgb8,
+    pick_material,
+)
+from seahaze.vessels.model import VesselPart
+from seahaze.vessels.parts import EMBED_M, PartSet, PrincipalDims, deck_range, min_half_beam, u
+
+__all__ = ["build_fishing_boat", "build_sailboat", "build_speedboat", "build_tug"]
+
+BLACK_RUBBER = material_from_srgb8("fender_rubber", (25, 25, 25), 0.8)
+
+
+def _deck_at(form: HullForm, x: float) -> float:
+    return float(form.deck_z(np.array([x]))[0])
+
+
+def build_fishing_boat(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
+    """Trawler / seiner: strong sheer, whaleback forecastle, deckhouse with wheelhouse (forward
+    on trawlers, aft on seiners/longliners), pole mast, and often a stern A-frame gantry."""
+    length, beam = d.length, d.beam
+    has_forecastle = rng.random() < 0.5
+    form = HullForm(
+        length=length,
+        beam=beam,
+        draft=d.draft,
+        freeboard=d.freeboard,
+        sheer_fwd=u(rng, 0.25, 0.45) * d.depth,
+        sheer_aft=u(rng, 0.05, 0.1) * d.depth,
+        forecastle_height=u(rng, 1.4, 2.0) if has_forecastle else 0.0,
+        forecastle_length=u(rng, 0.18, 0.28) * length if has_forecastle else 0.0,
+        entrance_exponent=u(rng, 1.6, 2.2),
+        bow_roundness=u(rng, 1.0, 1.2),
+        transom_width=u(rng, 0.7, 0.9),
+        stem_rake=u(rng, 0.05, 0.09),
+        stem_exponent=0.7,
+        stern_cutup=u(rng, 0.15, 0.2),
+        transom_immersion=u(rng, 0.3, 0.6),
+        section_exponent=u(rng, 2.5, 3.5),
+        bow_flare=0.3,
+        topside_flare=0.05,
+    )
+    hull = pick_material(HULL_PAINTS_CARGO + HULL_PAINTS_SMALL, rng)
+    white = pick_material(SUPERSTRUCTURE_WHITES, rng)
+    glass = WINDOW_GLASS[0]
+    parts = PartSet()
+    parts.add_hull(form, hull, bottom=pick_material(ANTIFOULING_REDS, rng), boot_top_z=0.25)
+
+    house_len = u(rng, 0.2, 0.28) * length
+    if rng.random() < 0.6:  # trawler: wheelhouse forward of midships
+        x_aft = u(rng, -0.1, 0.05) * length
+    else:  # seiner / longliner: wheelhouse aft
+        x_aft = -form.half_length + u(rng, 0.06, 0.12) * length
+    x_fwd = x_aft + house_len
+    z_deck, _ = deck_range(form, x_aft, x_fwd)
+    hw = u(rng, 0.65, 0.85) * (min_half_beam(form, x_aft, x_fwd) - 0.1)
+    z = z_deck
+    if length >= 15.0:  # a lower deckhouse under the wheelhouse on all but small boats
+        h = u(rng, 2.0, 2.3)
+        parts.add_block("superstructure", white, x_aft, x_fwd, hw, z - EMBED_M, z + h)
+        z += h
+    wh_len = u(rng, 0.5, 0.7) * house_len
+    wh_h = u(rng, 1.9, 2.2)
+    parts.add_block(
+        "superstructure",
+        white,
+        x_fwd - wh_len,
+        x_fwd,
+        0.9 * hw,
+        z - EMBED_M,
+        z + wh_h,
+        front_rake=0.4,
+    )
+    parts.add_window_band(
+        x_fwd - wh_len + 0.2, x_fwd - 0.35, 0.9 * hw, z + 0.9, z + wh_h - 0.4, glass
+    )
+    z += wh_h
+    mast_paint = pick_material(MACHINERY_PAINTS, rng)
+    parts.add_mast(
+        x_fwd - 0.5 * wh_len,
+        0.0,
+        z,
+        u(rng, 0.15, 0.3) * length + 1.5,
+        max(0.08, 0.006 * length),
+        mast_paint,
+        yard_half_width=0.6 * hw,
+    )
+    if rng.random() < 0.6:  # stern gantry (A-frame) for trawl doors / nets
+        xg = -form.half_length + u(rng, 0.03, 0.06) * length
+        zg = _deck_at(form, xg)
+        top = zg + u(rng, 0.12, 0.2) * length + 1.5
+        half = min_half_beam(form, xg - 0.5, xg + 0.5)
+        r = max(0.1, 0.006 * length)
+        for side in (-1.0, 1.0):
+            parts.add(
+                "gantry",
+                cylinder_between(
+                    (xg, side * 0.85 * half, zg - EMBED_M), (xg, side * 0.6 * half, top), r
+                ),
+                mast_paint,
+            )
+        parts.add(
+            "gantry", cylinder_between((xg, -0.6 * half, top), (xg, 0.6 * half, top), r), mast_paint
+        )
+    if rng.random() < 0.5:  # net drum on the working deck
+        xd = x_aft - u(rng, 0.08, 0.12) * length if x_aft > -0.2 * length else x_fwd + 0.1 * length
+        zd = _deck_at(form, xd)
+        rd = max(0.4, 0.03 * length)
+        half = 0.6 * min_half_beam(form, xd - rd, xd + rd)
+        parts.add(
+            "net_drum",
+            cylinder_between((xd, -half, zd + rd), (xd, half, zd + rd), rd, sections=14),
+            mast_paint,
+        )
+    return parts.to_parts()
+
+
+def build_tug(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
+    """Harbour / ASD tug: short beamy hull with high forecastle and a heavy rubber fender at
+    the sheer, deckhouse with an all-round-windowed wheelhouse on top, twin exhaust stacks."""
+    length, beam = d.length, d.beam
+    fender = float(np.clip(0.012 * length, 0.25, 0.45))
+    form = HullForm(
+        length=length,
+        beam=beam - 2.0 * fender,
+        draft=d.draft,
+        freeboard=d.freeboard,
+        sheer_fwd=u(rng, 0.25, 0.45) * d.depth,
+        sheer_aft=u(rng, 0.0, 0.05) * d.depth,
+        forecastle_height=u(rng, 1.4, 2.2),
+        forecastle_length=u(rng, 0.4, 0.5) * length,
+        parallel_fwd=u(rng, 0.0, 0.1),
+        entrance_exponent=u(rng, 2.0, 2.6),
+        bow_roundness=u(rng, 1.5, 2.0),
+        transom_width=u(rng, 0.8, 0.92),
+        stem_rake=u(rng, 0.07, 0.12),
+        stem_exponent=0.8,
+        stern_cutup=u(rng, 0.2, 0.25),
+        transom_immersion=u(rng, 0.3, 0.5),
+        section_exponent=2.5,
+        bow_flare=0.1,
+        topside_flare=0.05,
+    )
+    hull = pick_material(HULL_PAINTS_CARGO, rng)
+    house_paint = pick_material(SUPERSTRUCTURE_WHITES, rng) if rng.random() < 0.7 else hull
+    glass = WINDOW_GLASS[0]
+    parts = PartSet()
+    parts.add_hull(form, hull, bottom=pick_material(ANTIFOULING_REDS, rng), boot_top_z=0.3)
+    fender_h = u(rng, 0.7, 1.1)
+    parts.add(
+        "fender",
+        loft_hull(
+            form,
+            z_low=lambda x: form.deck_z(x) - fender_h,
+            z_high=lambda x: form.deck_z(x) - 0.05,
+            inflate=fender,
+            n_stations=40,
+            n_vertical=4,
+        ),
+        BLACK_RUBBER,
+    )
+
+    x_aft = -u(rng, 0.12, 0.2) * length
+    x_fwd = u(rng, 0.12, 0.22) * length
+    z_low, z_high = deck_range(form, x_aft, x_fwd)
+    hw = u(rng, 0.6, 0.7) * min_half_beam(form, x_aft, x_fwd)
+    z_roof = z_high + u(rng, 2.3, 2.8)
+    parts.add_block("superstructure", house_paint, x_aft, x_fwd, hw, z_low - EMBED_M, z_roof)
+    wh_len = u(rng, 0.14, 0.2) * length
+    wh_x1 = x_fwd + 0.3
+    wh_z0 = z_roof + u(rng, 0.0, 1.0)
+    wh_z1 = wh_z0 + u(rng, 2.3, 2.6)
+    wh_hw = u(rng, 0.3, 0.36) * beam
+    parts.add_block(
+        "superstructure",
+        house_paint,
+        wh_x1 - wh_len,
+        wh_x1,
+        wh_hw,
+        z_roof - EMBED_M,
+        wh_z1,
+        front_rake=0.2,
+        aft_rake=0.2,
+    )
+    parts.add_window_band(
+        wh_x1 - wh_len + 0.15, wh_x1 - 0.2, wh_hw - 0.1, wh_z0 + 0.9, wh_z1 - 0.35, glass
+    )
+    parts.add_mast(
+        wh_x1 - 0.5 * wh_len, 0.0, wh_z1, u(rng, 3.0, 5.0), 0.12, house_paint, yard_half_width=1.2
+    )
+    funnel = pick_material(FUNNEL_PAINTS, rng)
+    xs = x_aft + u(rng, 0.1, 0.2) * (x_fwd - x_aft)
+    stack_r = u(rng, 0.25, 0.35)
+    for side in (-1.0, 1.0):
+        parts.add(
+            "funnel",
+            vertical_cylinder(
+                xs, side * 0.22 * beam, stack_r, z_roof - EMBED_M, z_roof + u(rng, 2.5, 4.0)
+            ),
+            funnel,
+        )
+    if rng.random() < 0.5:  # towing staple over the aft deck
+        xt = -u(rng, 0.3, 0.38) * length
+        zt = _deck_at(form, xt)
+        half = 0.7 * min_half_beam(form, xt - 0.3, xt + 0.3)
+        top = zt + u(rng, 1.8, 2.4)
+        for side in (-1.0, 1.0):
+            parts.add(
+                "towing_staple",
+                cylinder_between((xt, side * half, zt - EMBED_M), (xt, side * half, top), 0.12),
+                funnel,
+            )
+        parts.add(
+            "towing_staple", cylinder_between((xt, -half, top), (xt, half, top), 0.12), funnel
+        )
+    return parts.to_parts()
+
+
+def build_sailboat(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
+    """Sailing yacht (sloop): low hull with counter stern, coachroof, fin keel and rudder,
+    mast about 1.2-1.45 L above deck, mainsail + jib set (75 %) or stowed on the boom."""
+    length, beam = d.length, d.beam
+    form = HullForm(
+        length=length,
+        beam=beam,
+        draft=d.draft,
+        freeboard=d.freeboard,
+        sheer_fwd=u(rng, 0.1, 0.25) * d.depth,
+        sheer_aft=u(rng, 0.0, 0.05) * d.depth,
+        entrance_exponent=u(rng, 1.5, 2.0),
+        transom_width=u(rng, 0.55, 0.9),
+        stem_rake=u(rng, 0.02, 0.1),
+        stem_exponent=1.0,
+        stern_cutup=u(rng, 0.3, 0.4),
+        transom_immersion=u(rng, -0.6, -0.1),
+        section_exponent=2.0,
+        bow_flare=0.15,
+        topside_flare=0.08,
+    )
+    hull = HULL_PAINTS_SMALL[0] if rng.random() < 0.75 else pick_material(HULL_PAINTS_SMALL, rng)
+    deck_white = pick_material(SUPERSTRUCTURE_WHITES, rng)
+    antifouling = pick_material(ANTIFOULING_REDS, rng)
+    glass = WINDOW_GLASS[0]
+    parts = PartSet()
+    parts.add_hull(form, hull, bottom=antifouling, boot_top_z=0.08)
+
+    # Coachroof.
+    xa, xf = -u(rng, 0.05, 0.15) * length, u(rng, 0.12, 0.22) * length
+    z0, _ = deck_range(form, xa, xf)
+    hw = u(rng, 0.55, 0.7) * min_half_beam(form, xa, xf)
+    ch = float(np.clip(u(rng, 0.05, 0.07) * length, 0.4, 1.5))
+    parts.add_block(
+        "superstructure",
+        deck_white,
+        xa,
+        xf,
+        hw,
+        z0 - EMBED_M,
+        z0 + ch,
+        front_rake=0.6 * ch,
+        top_inset=0.1 * hw,
+    )
+    parts.add_window_band(
+        xa + 0.3 * (xf - xa), xf - ch, 0.95 * hw, z0 + 0.35 * ch, z0 + 0.7 * ch, glass, proud=0.02
+    )
+
+    # Fin keel and spade rudder: below the water, they set the draft the mesh reports.
+    total_draft = max(d.draft + 0.3, u(rng, 0.13, 0.19) * length)
+    chord_top, chord_bot = 0.14 * length, 0.08 * length
+    thick = max(0.04, 0.012 * length)
+    keel_pts = (
+        [(0.06 * length - chord_top, s * thick, -0.7 * d.draft) for s in (-1, 1)]
+        + [(0.06 * length, s * thick, -0.7 * d.draft) for s in (-1, 1)]
+        + [(0.04 * length - chord_bot, s * 0.6 * thick, -total_draft) for s in (-1, 1)]
+        + [(0.04 * length, s * 0.6 * thick, -total_draft) for s in (-1, 1)]
+    )
+    parts.add("keel", convex_body(keel_pts), antifouling)
+    xr = -0.38 * length
+    zr = float(form.keel_z(np.array([xr]))[0])
+    rudder_pts = [
+        (xr + dx, s * 0.6 * thick, z)
+        for dx in (-0.04 * length, 0.02 * length)
+        for s in (-1, 1)
+        for z in (zr + 0.1, -0.6 * total_draft)
+    ]
+    parts.add("keel", convex_body(rudder_pts), antifouling)
+
+    # Rig.
+    x_mast = u(rng, 0.02, 0.12) * length
+    deck_m = _deck_at(form, x_mast)
+    mast_h = u(rng, 1.2, 1.45) * length
+    mast_r = max(0.05, 0.008 * length)
+    spar = pick_material((MACHINERY_PAINTS[1], MACHINERY_PAINTS[2]), rng)
+    parts.add_mast(x_mast, 0.0, deck_m, mast_h, mast_r, spar, yard_half_width=0.12 * beam)
+    boom_z = deck_m + min(1.2, 0.1 * length) + ch * 0.5
+    boom_len = min(u(rng, 0.33, 0.42) * length, x_mast + 0.45 * length)
+    side = 1.0 if rng.random() < 0.5 else -1.0
+    max_angle = np.degrees(np.arcsin(min(1.0, 0.4 * beam / boom_len)))
+    angle = np.radians(u(rng, 0.0, min(25.0, max_angle))) * side
+    clew = (x_mast - boom_len * np.cos(angle), boom_len * np.sin(angle), boom_z)
+    tack = (x_mast - mast_r, 0.0, boom_z)
+    parts.add("boom", cylinder_between(tack, clew, 0.7 * mast_r), spar)
+    if rng.random() < 0.75:
+        cloth = pick_material(SAIL_CLOTH, rng)
+        head = (x_mast - mast_r, 0.0, deck_m + 0.97 * mast_h)
+        parts.add("sail_main", thin_triangle(tack, head, clew, 0.03), cloth)
+        jib_tack = (
+            form.half_length - 0.03 * length,
+            0.0,
+            _deck_at(form, form.half_length - 0.03 * length) + 0.3,
+        )
+        jib_head = (x_mast + mast_r, 0.0, deck_m + u(rng, 0.75, 0.9) * mast_h)
+        jib_clew = (
+            x_mast - u(rng, 0.0, 0.1) * length,
+            side * u(rng, 0.15, 0.4) * beam,
+            deck_m + 0.6,
+        )
+        parts.add("sail_jib", thin_triangle(jib_tack, jib_head, jib_clew, 0.03), cloth)
+    else:
+        cover = pick_material(FUNNEL_PAINTS[1:2] + SAIL_CLOTH[2:], rng)
+        parts.add("sail_cover", cylinder_between(tack, clew, 2.5 * mast_r), cover)
+    return parts.to_parts()
+
+
+def build_speedboat(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
+    """Planing motorboat: deep-V hull with a long raked bow and full-width transom; cuddy
+    cabin, centre console with T-top, or open runabout with a windscreen; outboard engines."""
+    length, beam = d.length, d.beam
+    form = HullForm(
+        length=length,
+        beam=beam,
+        draft=d.draft,
+        freeboard=d.freeboard,
+        sheer_fwd=u(rng, 0.15, 0.35) * d.depth,
+        entrance_exponent=u(rng, 1.3, 1.8),
+        transom_width=u(rng, 0.85, 0.98),
+        stem_rake=u(rng, 0.15, 0.25),
+        stem_exponent=1.8,
+        stern_cutup=0.05,
+        transom_immersion=u(rng, 0.85, 1.0),
+        section_exponent=u(rng, 1.0, 1.4),
+        bow_flare=0.15,
+        topside_flare=u(rng, 0.08, 0.15),
+    )
+    hull = pick_material(HULL_PAINTS_SMALL, rng)
+    white = pick_material(SUPERSTRUCTURE_WHITES, rng)
+    glass = WINDOW_GLASS[0]
+    parts = PartSet()
+    parts.add_hull(
+        form,
+        hull,
+        bottom=pick_material(HULL_PAINTS_SMALL + ANTIFOULING_REDS, rng),
+        boot_top_z=u(rng, 0.05, 0.2),
+    )
+    style = ("cuddy", "console", "open")[int(rng.integers(3))]
+    if style == "cuddy":
+        xa, xf = -u(rng, 0.0, 0.1) * length, u(rng, 0.2, 0.3) * length
+        z0, _ = deck_range(form, xa, xf)
+        hw = 0.75 * min_half_beam(form, xa, xf)
+        h = float(np.clip(u(rng, 0.06, 0.08) * length, 0.4, 1.1))
+        parts.add_block(
+            "superstructure",
+            white,
+            xa,
+            xf,
+            hw,
+            z0 - EMBED_M,
+            z0 + h,
+            front_rake=0.7 * (xf - xa),
+            top_inset=0.15 * hw,
+        )
+        _windscreen(parts, xa + 0.3 * (xf - xa), z0 + h, hw * 0.9, glass)
+    elif style == "console":
+        xa, xf = -u(rng, 0.03, 0.08) * length, u(rng, 0.02, 0.06) * length
+        z0, _ = deck_range(form, xa, xf)
+        hw = 0.25 * beam
+        parts.add_block("superstructure", white, xa, xf, hw, z0 - EMBED_M, z0 + 1.1, front_rake=0.3)
+        _windscreen(parts, xf - 0.2, z0 + 1.1, hw, glass)
+        roof_z = z0 + u(rng, 2.1, 2.4)
+        rx0, rx1 = xa - 0.1 * length, xf + 0.02 * length
+        rhw = min(0.38 * beam, min_half_beam(form, rx0, rx1) - 0.1)
+        for x in (rx0 + 0.2, rx1 - 0.2):
+            for s in (-1.0, 1.0):
+                parts.add(
+                    "t_top",
+                    cylinder_between(
+                        (x, s * 0.8 * rhw, z0 - EMBED_M), (x, s * 0.8 * rhw, roof_z), 0.04
+                    ),
+                    white,
+                )
+        parts.add("t_top", box(rx0, rx1, -rhw, rhw, roof_z, roof_z + 0.12), white)
+    else:
+        xw = u(rng, 0.05, 0.15) * length
+        _windscreen(parts, xw, _deck_at(form, xw), 0.8 * min_half_beam(form, xw - 0.5, xw), glass)
+    if length < 12.0 and rng.random() < 0.7:
+        engine = pick_material(
+            (MACHINERY_PAINTS[1], MACHINERY_PAINTS[2], *ANTIFOULING_REDS[2:]), rng
+        )
+        count = 1 if length < 7.0 else 2
+        zt = _deck_at(form, -form.half_length)
+        for i in range(count):
+            # Mounted on the transom inside the overall length (LOA includes the engines).
+            engine_body = tapered_block(
+                -form.half_length,
+                -form.half_length + 0.55,
+                0.22,
+                zt - 0.9,
+                zt + 0.45,
+                aft_rake=0.15,
+            )
+            engine_body.apply_translation([0.0, (i - 0.5 * (count - 1)) * 0.35 * beam, 0.0])
+            parts.add("outboards", engine_body, engine)
+    return parts.to_parts()
+
+
+def _windscreen(parts: PartSet, x: float, z: float, half_width: float, glass: Material) -> None:
+    """Raked windscreen: a thin dark plate leaning aft from (x, z) up 0.5 m."""
+    pts = [(x, s * half_width, z - 0.05) for s in (-1, 1)]
+    pts += [(x - 0.35, s * 0.9 * half_width, z + 0.5) for s in (-1, 1)]
+    pts += [(px - 0.04, py, pz) for px, py, pz in pts]
+    parts.add("windows", convex_body(pts), glass)
