@@ -31,7 +31,7 @@ BAD_SCENES = [
     ("haze:\n  threshold: fog\n", 2, "haze.threshold", ["koschmieder", "mor"]),
     ("haze:\n  albedo: 1.5\n", 2, "haze.albedo", ["less than or equal to 1"]),
     ("haze:\n  levels: [300, -1]\n", 2, "haze.levels[1]", ["greater than 0"]),
-    ("camera:\n  resolution: [640]\n", 2, "camera.resolution", ["2 items"]),
+    ("camera:\n  resolution: [640]\n", 2, "camera.resolution[1]", ["missing list item 2", "width and height"]),
     ("render:\n  mode: fast\n", 2, "render.mode", ["reference", "asm"]),
     ("render:\n  spp: lots\n", 2, "render.spp", ["integer"]),
     ("sea:\n  model: wavy\n", 2, "sea.model", ["flat", "gerstner", "fft"]),

@@ -84,7 +84,9 @@ def build_sea(spec: SceneSpec, camera: Camera) -> tuple[MeshData, float, ocean.O
     params = ocean_params(spec)
     surface = ocean.make_surface(params)
     vertices, faces = ocean.build_sea_mesh(surface, camera_height_m=camera.height_m, quality=spec.sea.quality)[:2]
-    roughness = spec.sea.roughness if spec.sea.roughness is not None else ocean.sub_grid_roughness(params.wind_speed, surface)
+    # Full Cox–Munk roughness: most of the frame is the far sea, where the mesh is faded flat and
+    # every wave is sub-grid; near the camera this counts the resolved waves twice (slightly rough).
+    roughness = spec.sea.roughness if spec.sea.roughness is not None else ocean.cox_munk_alpha(params.wind_speed)
     return MeshData("sea", vertices, faces, spec.sea.water_color, roughness), roughness, surface
 
 

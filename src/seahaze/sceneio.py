@@ -140,6 +140,8 @@ def _problems_from_validation(err: ValidationError, file: str, lines: dict[Loc, 
         loc = tuple(p for p in loc if not (isinstance(p, str) and ("[" in p or p in ("float", "int", "str"))))
         if item["type"] == "extra_forbidden":
             message = f"unknown key '{loc[-1]}'{_allowed_keys(loc)}"
+        elif item["type"] == "missing" and loc and isinstance(loc[-1], int):
+            message = f"missing list item {loc[-1] + 1} ({_dotted(loc[:-1])}: {_field_info(loc[:-1]).description})"
         else:
             message = item["msg"].replace("Value error, ", "") + _allowed(loc)
         problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), message))

@@ -85,10 +85,13 @@ def _mesh(mesh: MeshData, bsdf: dict) -> Any:
 
 
 def _sea_bsdf(spec: SceneSpec, roughness: float) -> dict:
-    """Fresnel interface (n = ior) over a dark diffuse water body: Mitsuba's rough plastic."""
+    """Fresnel interface (n = ior) over a dark diffuse water body: Mitsuba's rough plastic.
+
+    Beckmann microfacets, because Cox and Munk's sea-surface slopes are Gaussian.
+    """
     return {
         "type": "roughplastic",
-        "distribution": "ggx",
+        "distribution": "beckmann",
         "alpha": roughness,
         "int_ior": spec.sea.ior,
         "ext_ior": 1.000277,

@@ -1,0 +1,73 @@
+"""Procedural ocean surfaces controlled by sea state (numpy/scipy only).
+
+* :mod:`~seahaze.ocean.spectra` — Pierson–Moskowitz, JONSWAP and Phillips spectra, directional
+  spreading, deep-water dispersion.
+* :mod:`~seahaze.ocean.beaufort` — Beaufort 0–12 presets (wind speed, probable wave height).
+* :mod:`~seahaze.ocean.gerstner`, :mod:`~seahaze.ocean.fft` — the two wave generators behind
+  :class:`OceanSurface`; :func:`make_surface` picks one from :class:`OceanParams`.
+* :mod:`~seahaze.ocean.mesh` — camera-centred polar mesh out to 100 km.
+* :mod:`~seahaze.ocean.cox_munk` — Cox–Munk slope statistics → microfacet roughness.
+
+See ``docs/ocean.md``.
+"""
+
+from .base import (
+    ChoppinessClampedWarning,
+    FlatSurface,
+    OceanParams,
+    OceanSurface,
+    height_at,
+    invert_horizontal_displacement,
+)
+from .beaufort import (
+    BEAUFORT_SCALE,
+    BeaufortForce,
+    beaufort,
+    beaufort_force_for_wind,
+    beaufort_wave_height,
+    beaufort_wind_speed,
+    ocean_params_for_beaufort,
+)
+from .cox_munk import (
+    beckmann_alpha,
+    cox_munk_alpha,
+    cox_munk_anisotropic_alpha,
+    mean_square_slope,
+    sub_grid_roughness,
+)
+from .fft import FFTCascade, FFTOcean, fft_choppiness_limit
+from .gerstner import GerstnerOcean
+from .mesh import SeaMesh, build_sea_mesh, build_sea_mesh_data, horizon_gap_angle
+from .spectra import SeaSpectrum
+from .surface import make_surface
+
+__all__ = [
+    "BEAUFORT_SCALE",
+    "BeaufortForce",
+    "ChoppinessClampedWarning",
+    "FFTCascade",
+    "FFTOcean",
+    "FlatSurface",
+    "GerstnerOcean",
+    "OceanParams",
+    "OceanSurface",
+    "SeaMesh",
+    "SeaSpectrum",
+    "beaufort",
+    "beaufort_force_for_wind",
+    "beaufort_wave_height",
+    "beaufort_wind_speed",
+    "beckmann_alpha",
+    "build_sea_mesh",
+    "build_sea_mesh_data",
+    "cox_munk_alpha",
+    "cox_munk_anisotropic_alpha",
+    "fft_choppiness_limit",
+    "height_at",
+    "horizon_gap_angle",
+    "invert_horizontal_displacement",
+    "make_surface",
+    "mean_square_slope",
+    "ocean_params_for_beaufort",
+    "sub_grid_roughness",
+]

@@ -1,0 +1,300 @@
+"""A camera-centred polar sea mesh that reaches far beyond the horizon.
+
+Layout
+    One centre vertex plus ``n_rings`` rings of ``n_theta`` vertices (constant angular step
+    ``2·pi/n_theta``), triangulated as a fan around the centre and two triangles per ring
+    segment: one connected grid with no cracks whose only boundary is the outer ring.
+
+    * Near zone ``0 < r <= fade_end`` (``n_near`` rings): ``r(u) = s·((1 + fade_end/s)^u - 1)``,
+      ``u = j/n_near``, with ``s = max(camera height, 0.5 m)``: rings are evenly spaced
+      (``≈ s·ln(1 + fade_end/s)/n_near``) below the camera and geometric (spacing proportional to
+      ``r + s``) further out, i.e. fine near the camera and coarse far away.
+    * Far zone ``fade_end < r <= R`` (``n_far = max(8, n_rings/16)`` rings): geometric. The sea
+      is flat there, so the coarse rings cost no accuracy.
+
+Displacement fade
+    Far displaced geometry aliases: once the ring spacing exceeds a fraction of the wavelength,
+    the sampled waves turn into moiré. Two measures act together. (1) Band limiting: every
+    vertex samples the surface through ``displacement_filtered(x, y, spacing)`` with its local
+    vertex spacing (the larger of the radial and tangential spacing), which keeps waves longer
+    than about 4 spacings and removes those shorter than 2 (FFT: low-pass pyramid of each
+    patch; Gerstner: per-component weights). (2) An overall fade: the displacement is
+    multiplied by ``w(r) = 1 - smoothstep((ln r - ln r0)/(ln r1 - ln r0))`` with
+    ``r1 = fade_end = 2·r0``:
+    ``w = 1`` up to ``r0 = fade_start``, 0 beyond ``r1``. ``r0`` is the radius at which the
+    radial ring spacing equals ``lambda_p/6`` (six vertices per peak wavelength), so the
+    dominant waves are well sampled wherever they are displaced. If the caller gives the pixel
+    angle ``delta`` (rad), ``r1`` is further limited to ``2·Hs/delta``, where the largest waves
+    (about ``2·Hs`` crest to trough) subtend less than one pixel. Beyond the fade the wave slopes
+    belong to the BSDF (Cox–Munk roughness, :mod:`seahaze.ocean.cox_munk`).
+
+Horizon
+    A plane's horizon is at infinity; a disc of radius ``R`` leaves the rays between the
+    horizon and the depression ``atan(h/R)`` uncovered (camera height ``h``). With ``n_theta``
+    vertices the outer ring is a polygon whose inscribed radius is ``R·cos(pi/n_theta)``. At
+    160×90 px and a 60° horizontal field of view a pixel spans 60°/160 = 0.375° (6.5 mrad;
+    vertically ``2·atan(tan 30°·90/160)/90 = 0.40°``), so the gap is under one pixel when
+    ``R > h/tan(0.375°) = 153·h``: 30.6 km for ``h = 200 m``. The default ``R = 1e5 m`` leaves
+    a gap of 0.31 px at 200 m, 0.15 px at 100 m and 0.003 px at 2 m.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from .base import OceanSurface
+
+Quality = Literal["low", "medium", "high"]
+
+QUALITY_PRESETS: dict[str, tuple[int, int]] = {
+    "low": (256, 195),
+    "medium": (512, 488),
+    "high": (1024, 976),
+}
+"""``quality -> (n_theta, n_rings)``: about 0.1 M, 0.5 M and 2 M triangles
+(``n_theta·(2·n_rings - 1)``)."""
+
+DEFAULT_RADIUS_M = 1.0e5
+"""Default outer radius of the sea disc (m); see the module docstring."""
+
+VERTICES_PER_PEAK_WAVELENGTH = 6.0
+"""Radial vertices per peak wavelength required where the displacement is at full strength."""
+
+FADE_RATIO = 2.0
+"""``fade_end / fade_start``."""
+
+MIN_FAR_RINGS = 8
+MIN_NEAR_SCALE_M = 0.5
+
+
+@dataclass(frozen=True)
+class SeaMesh:
+    """A polar sea mesh.
+
+    Attributes:
+        vertices: ``(N, 3)`` float32 world positions (m).
+        faces: ``(M, 3)`` uint32 vertex indices, counter-clockwise seen from above.
+        normals: ``(N, 3)`` float32 area-weighted unit vertex normals.
+        ring_radii_m: rest radii of the rings (m), starting with 0 for the centre vertex.
+        n_theta: vertices per ring.
+        center_xy: world position of the centre (m).
+        fade_start_m, fade_end_m: displacement fade radii (m); 0 for a flat sea.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    normals: np.ndarray
+    ring_radii_m: np.ndarray
+    n_theta: int
+    center_xy: tuple[float, float]
+    fade_start_m: float
+    fade_end_m: float
+
+    @property
+    def radius_m(self) -> float:
+        """Outer (circumscribed) radius of the disc (m)."""
+        return float(self.ring_radii_m[-1])
+
+    def fade_weight(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Displacement weight at world positions (x, y), e.g. to scale a floating object's
+        heave consistently with the mesh."""
+        r = np.hypot(np.asarray(x) - self.center_xy[0], np.asarray(y) - self.center_xy[1])
+        return displacement_fade(r, self.fade_start_m, self.fade_end_m)
+
+
+def displacement_fade(r: np.ndarray, fade_start_m: float, fade_end_m: float) -> np.ndarray:
+    """Weight 1 for ``r <= fade_start_m``, 0 for ``r >= fade_end_m``, a smoothstep in ``ln r``
+    between; everything 0 if ``fade_end_m <= 0`` (flat sea)."""
+    r = np.asarray(r, dtype=float)
+    if fade_end_m <= 0.0:
+        return np.zeros_like(r)
+    lo, hi = math.log(fade_start_m), math.log(fade_end_m)
+    t = (np.log(np.maximum(r, 1e-9)) - lo) / (hi - lo)
+    t = np.clip(t, 0.0, 1.0)
+    return 1.0 - t * t * (3.0 - 2.0 * t)
+
+
+def horizon_gap_angle(camera_height_m: float, radius_m: float, n_theta: int | None = None) -> float:
+    """Depression angle (rad) below which every ray from height ``camera_height_m`` hits a flat
+    polar disc of circumscribed radius ``radius_m`` (inscribed radius with ``n_theta`` sides)."""
+    inscribed = radius_m * (math.cos(math.pi / n_theta) if n_theta else 1.0)
+    return math.atan2(camera_height_m, inscribed)
+
+
+def minimum_radius(camera_height_m: float, max_gap_rad: float) -> float:
+    """Smallest disc radius (m) whose horizon gap is below ``max_gap_rad``: ``h/tan(gap)``."""
+    return camera_height_m / math.tan(max_gap_rad)
+
+
+def _near_rings(n_near: int, fade_end_m: float, scale_m: float) -> np.ndarray:
+    u = np.arange(1, n_near + 1) / n_near
+    return scale_m * np.expm1(u * math.log1p(fade_end_m / scale_m))
+
+
+def _far_rings(n_far: int, inner_m: float, outer_m: float) -> np.ndarray:
+    u = np.arange(1, n_far + 1) / n_far
+    return inner_m * (outer_m / inner_m) ** u
+
+
+def fade_radii(
+    surface: OceanSurface,
+    n_near: int,
+    near_scale_m: float,
+    radius_m: float,
+    pixel_angle_rad: float | None = None,
+) -> tuple[float, float]:
+    """``(fade_start, fade_end)`` (m) for ``surface``; ``(0, 0)`` for a flat sea.
+
+    ``fade_start`` solves ``(r + s)·ln(1 + 2r/s)/n_near = lambda_p/6`` (the near-zone ring
+    spacing equals a sixth of the peak wavelength); ``fade_end = 2·fade_start``, limited to
+    ``2·Hs/pixel_angle`` if the pixel angle is given and to a quarter of the disc radius.
+    """
+    wavelength = surface.peak_wavelength_m
+    hs = surface.significant_wave_height_m
+    if not math.isfinite(wavelength) or hs <= 0.0:
+        return 0.0, 0.0
+    target_spacing = wavelength / VERTICES_PER_PEAK_WAVELENGTH
+    start = 10.0 * wavelength
+    for _ in range(20):
+        log_term = math.log1p(FADE_RATIO * start / near_scale_m)
+        start = max(target_spacing * n_near / log_term - near_scale_m, near_scale_m)
+    end = FADE_RATIO * start
+    if pixel_angle_rad is not None:
+        end = min(end, max(2.0 * hs / pixel_angle_rad, 2.0 * near_scale_m))
+    end = min(end, 0.25 * radius_m)
+    return end / FADE_RATIO, end
+
+
+def polar_grid_faces(n_theta: int, n_rings: int) -> np.ndarray:
+    """Faces ``(n_theta·(2·n_rings - 1), 3)`` uint32 of a centre vertex (index 0) plus
+    ``n_rings`` rings of ``n_theta`` vertices (ring ``j >= 1`` starts at ``1 + (j-1)·n_theta``),
+    counter-clockwise seen from +z when angles grow counter-clockwise."""
+    i = np.arange(n_theta, dtype=np.int64)
+    i_next = (i + 1) % n_theta
+    fan = np.stack([np.zeros(n_theta, dtype=np.int64), 1 + i, 1 + i_next], axis=1)
+    inner_base = 1 + np.arange(n_rings - 1, dtype=np.int64)[:, None] * n_theta
+    outer_base = inner_base + n_theta
+    a, a1 = inner_base + i, inner_base + i_next
+    b, b1 = outer_base + i, outer_base + i_next
+    first = np.stack([a, b, b1], axis=-1).reshape(-1, 3)
+    second = np.stack([a, b1, a1], axis=-1).reshape(-1, 3)
+    quads = np.stack([first, second], axis=1).reshape(-1, 3)
+    return np.concatenate([fan, quads]).astype(np.uint32)
+
+
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area-weighted unit vertex normals ``(N, 3)`` float32."""
+    v = vertices.astype(np.float64)
+    f = faces.astype(np.int64)
+    face_n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    n = np.empty_like(v)
+    for axis in range(3):
+        weights = np.repeat(face_n[:, axis], 3)
+        n[:, axis] = np.bincount(f.ravel(), weights=weights, minlength=len(v))
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
+    return n.astype(np.float32)
+
+
+def ring_spacing(radii: np.ndarray, n_theta: int) -> np.ndarray:
+    """Vertex spacing (m) of every ring ``j >= 1`` of ``radii`` (which starts with 0): the
+    larger of the radial spacing (half the distance between the neighbouring rings) and the
+    tangential spacing ``r·2·pi/n_theta``."""
+    padded = np.concatenate([radii, [2.0 * radii[-1] - radii[-2]]])
+    radial = 0.5 * (padded[2:] - padded[:-2])
+    tangential = radii[1:] * (2.0 * math.pi / n_theta)
+    return np.maximum(radial, tangential)
+
+
+def _displace(
+    surface: OceanSurface, x: np.ndarray, y: np.ndarray, spacing: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Band-limited displacement when the surface supports it (``displacement_filtered``),
+    plain displacement otherwise."""
+    filtered = getattr(surface, "displacement_filtered", None)
+    if filtered is not None:
+        return filtered(x, y, spacing)
+    return surface.displacement(x, y)
+
+
+def build_sea_mesh_data(
+    surface: OceanSurface,
+    camera_xy: tuple[float, float] = (0.0, 0.0),
+    camera_height_m: float = 10.0,
+    quality: Quality = "medium",
+    radius_m: float | None = None,
+    pixel_angle_rad: float | None = None,
+) -> SeaMesh:
+    """Build the polar sea mesh around ``camera_xy`` (see the module docstring).
+
+    Args:
+        surface: the ocean surface (``displacement`` is evaluated at rest positions).
+        camera_xy: horizontal camera position (m); the grid is centred there.
+        camera_height_m: camera height above mean sea level (m); sets the near-ring spacing.
+        quality: ``"low"`` | ``"medium"`` | ``"high"`` (:data:`QUALITY_PRESETS`).
+        radius_m: outer radius (m); default :data:`DEFAULT_RADIUS_M`.
+        pixel_angle_rad: angular size of one pixel (rad), if known, to fade sub-pixel waves.
+    """
+    if quality not in QUALITY_PRESETS:
+        raise ValueError(f"quality must be one of {sorted(QUALITY_PRESETS)}, got {quality!r}")
+    n_theta, n_rings = QUALITY_PRESETS[quality]
+    radius = DEFAULT_RADIUS_M if radius_m is None else float(radius_m)
+    n_far = max(MIN_FAR_RINGS, n_rings // 16)
+    n_near = n_rings - n_far
+    scale = max(float(camera_height_m), MIN_NEAR_SCALE_M)
+    fade_start, fade_end = fade_radii(surface, n_near, scale, radius, pixel_angle_rad)
+
+    if fade_end > 0.0:
+        radii = np.concatenate(
+            [[0.0], _near_rings(n_near, fade_end, scale), _far_rings(n_far, fade_end, radius)]
+        )
+    else:
+        radii = np.concatenate([[0.0], _near_rings(n_rings, radius, scale)])
+
+    theta = np.arange(n_theta) * (2.0 * math.pi / n_theta)
+    cos_t, sin_t = np.cos(theta), np.sin(theta)
+    r = np.concatenate([[0.0], np.repeat(radii[1:], n_theta)])
+    x = np.concatenate([[0.0], np.outer(radii[1:], cos_t).ravel()]) + camera_xy[0]
+    y = np.concatenate([[0.0], np.outer(radii[1:], sin_t).ravel()]) + camera_xy[1]
+    z = np.zeros_like(x)
+
+    displaced = r < fade_end
+    if np.any(displaced):
+        weight = displacement_fade(r[displaced], fade_start, fade_end)
+        spacing = np.concatenate([[radii[1]], np.repeat(ring_spacing(radii, n_theta), n_theta)])
+        dx, dy, dz = _displace(surface, x[displaced], y[displaced], spacing[displaced])
+        x[displaced] += weight * dx
+        y[displaced] += weight * dy
+        z[displaced] = weight * dz
+
+    vertices = np.stack([x, y, z], axis=1).astype(np.float32)
+    faces = polar_grid_faces(n_theta, len(radii) - 1)
+    return SeaMesh(
+        vertices=vertices,
+        faces=faces,
+        normals=vertex_normals(vertices, faces),
+        ring_radii_m=radii,
+        n_theta=n_theta,
+        center_xy=(float(camera_xy[0]), float(camera_xy[1])),
+        fade_start_m=fade_start,
+        fade_end_m=fade_end,
+    )
+
+
+def build_sea_mesh(
+    surface: OceanSurface,
+    camera_xy: tuple[float, float] = (0.0, 0.0),
+    camera_height_m: float = 10.0,
+    quality: Quality = "medium",
+    radius_m: float | None = None,
+    *,
+    pixel_angle_rad: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(vertices float32 (N, 3), faces uint32 (M, 3))`` of :func:`build_sea_mesh_data`."""
+    mesh = build_sea_mesh_data(
+        surface, camera_xy, camera_height_m, quality, radius_m, pixel_angle_rad
+    )
+    return mesh.vertices, mesh.faces

@@ -1,0 +1,98 @@
+"""Beaufort presets and Cox–Munk roughness."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from seahaze.ocean import (
+    BEAUFORT_SCALE,
+    FlatSurface,
+    beaufort_force_for_wind,
+    beaufort_wave_height,
+    beaufort_wind_speed,
+    beckmann_alpha,
+    cox_munk_alpha,
+    cox_munk_anisotropic_alpha,
+    make_surface,
+    mean_square_slope,
+    ocean_params_for_beaufort,
+    sub_grid_roughness,
+)
+from seahaze.ocean.cox_munk import mean_square_slope_components
+
+
+def test_beaufort_table_is_monotone_and_contiguous() -> None:
+    forces = [row.force for row in BEAUFORT_SCALE]
+    assert forces == list(range(13))
+    winds = [beaufort_wind_speed(f) for f in forces]
+    heights = [beaufort_wave_height(f) for f in forces]
+    assert all(b > a for a, b in itertools.pairwise(winds))
+    assert all(b > a for a, b in itertools.pairwise(heights[1:]))
+    assert heights[0] == 0.0
+    for lower, upper in itertools.pairwise(BEAUFORT_SCALE):
+        assert upper.wind_min == pytest.approx(lower.wind_max + 0.1)  # 0.1 m/s resolution
+        assert lower.wind_min <= lower.wind_speed <= lower.wind_max
+    assert beaufort_wind_speed(4) == pytest.approx(6.7)
+    assert beaufort_wave_height(7) == 4.0
+
+
+@pytest.mark.parametrize("force", range(13))
+def test_force_for_nominal_wind_round_trips(force: int) -> None:
+    assert beaufort_force_for_wind(beaufort_wind_speed(force)) == force
+
+
+def test_presets_reach_the_table_height_where_the_sea_can() -> None:
+    assert isinstance(make_surface(ocean_params_for_beaufort(0)), FlatSurface)
+    for force in (5, 7, 9):
+        params = ocean_params_for_beaufort(force)
+        hs = params.sea_spectrum().significant_wave_height
+        assert hs == pytest.approx(beaufort_wave_height(force), rel=1e-3)
+    # Force 2's table height exceeds a fully developed wind sea: the preset is fully developed.
+    light = ocean_params_for_beaufort(2).sea_spectrum()
+    assert light.significant_wave_height < beaufort_wave_height(2)
+
+
+def test_rougher_sea_state_has_larger_hs_and_slope_variance() -> None:
+    calm = make_surface(ocean_params_for_beaufort(2, seed=1))
+    rough = make_surface(ocean_params_for_beaufort(7, seed=1))
+    assert rough.significant_wave_height_m > 5.0 * calm.significant_wave_height_m
+    assert 4.0 * math.sqrt(rough.height_variance) > 4.0 * math.sqrt(calm.height_variance)
+    assert rough.mean_square_slope > 1.2 * calm.mean_square_slope
+    # The microfacet part grows with the wind as well.
+    assert cox_munk_alpha(beaufort_wind_speed(7)) > cox_munk_alpha(beaufort_wind_speed(2))
+
+
+def test_cox_munk_mean_square_slope_at_10_m_s() -> None:
+    assert mean_square_slope(10.0) == pytest.approx(0.0542, abs=1e-12)
+    up, cross = mean_square_slope_components(10.0)
+    assert up + cross == pytest.approx(0.0538)  # the component fits sum to ~ the total fit
+    assert cox_munk_alpha(10.0) == pytest.approx(math.sqrt(0.0542))
+
+
+def test_beckmann_alpha_matches_gaussian_slope_statistics() -> None:
+    """Mitsuba's Beckmann slope density exp(-(p² + q²)/alpha²)/(pi alpha²) has per-axis
+    variance alpha²/2, so the total mean square slope is alpha²."""
+    alpha = beckmann_alpha(0.0542)
+    p = np.linspace(-2.0, 2.0, 2001)
+    pp, qq = np.meshgrid(p, p)
+    density = np.exp(-(pp**2 + qq**2) / alpha**2) / (math.pi * alpha**2)
+    cell = (p[1] - p[0]) ** 2
+    assert np.sum(density) * cell == pytest.approx(1.0, rel=1e-6)
+    assert np.sum((pp**2 + qq**2) * density) * cell == pytest.approx(0.0542, rel=1e-6)
+    au, av = cox_munk_anisotropic_alpha(10.0)
+    up, cross = mean_square_slope_components(10.0)
+    assert (au**2 / 2.0, av**2 / 2.0) == pytest.approx((up, cross))
+
+
+def test_sub_grid_roughness_subtracts_resolved_slopes() -> None:
+    total = mean_square_slope(10.0)
+    assert sub_grid_roughness(10.0) == pytest.approx(cox_munk_alpha(10.0))
+    assert sub_grid_roughness(10.0, 0.02) == pytest.approx(math.sqrt(total - 0.02))
+    assert sub_grid_roughness(10.0, 1.0) == pytest.approx(math.sqrt(0.003))
+    surface = make_surface(ocean_params_for_beaufort(5, seed=0))
+    expected = math.sqrt(total - surface.mean_square_slope)
+    assert sub_grid_roughness(10.0, surface) == pytest.approx(expected)

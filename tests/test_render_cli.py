@@ -1,0 +1,88 @@
+"""End to end: `seahaze render` writes the whole dataset layout, deterministically."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from PIL import Image
+
+from seahaze.cli import main
+from seahaze.imaging import read_exr
+
+ROOT = Path(__file__).resolve().parents[1]
+LEVELS = ["v0300", "v4000"]
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("ds")
+    code = main(["render", str(ROOT / "scenes" / "default.yaml"), "--vis", "300,4000", "--res", "64x36", "--spp", "2",
+                 "--out", str(out), "--quiet"])
+    assert code == 0
+    return out
+
+
+def test_layout_is_complete(dataset):
+    for level in ["clean", *LEVELS]:
+        image = Image.open(dataset / "images" / level / "default.png")
+        assert image.size == (64, 36) and image.mode == "RGB"
+        assert (dataset / "labels" / level / "default.txt").exists()
+        assert (dataset / "exr" / level / "default.exr").exists()
+    assert (dataset / "depth" / "default.exr").exists()
+    meta = json.loads((dataset / "meta" / "default.json").read_text())
+    assert [lv["name"] for lv in meta["levels"]] == LEVELS
+
+
+def test_labels_are_identical_at_every_level(dataset):
+    texts = {(dataset / "labels" / level / "default.txt").read_text() for level in ["clean", *LEVELS]}
+    assert len(texts) == 1
+
+
+def test_data_yaml_has_names_and_one_split_per_level(dataset):
+    data = yaml.safe_load((dataset / "data.yaml").read_text())
+    assert Path(data["path"]).is_absolute() and data["train"] == "images/clean"
+    for level in LEVELS:
+        assert data[level] == f"images/{level}"
+    assert data["names"][0] == "container_ship"
+
+
+def test_manifest_lists_levels_with_sigma_and_class(dataset):
+    manifest = json.loads((dataset / "dataset.json").read_text())
+    level = manifest["levels"][0]
+    assert level["name"] == "v0300" and level["sigma_per_m"] == pytest.approx(3.912 / 300, rel=1e-3)
+    assert level["regulation"] == "strict"
+    assert manifest["scenes"]["default"]["status"] == "done"
+
+
+def test_depth_is_finite_for_sea_and_inf_for_sky(dataset):
+    depth = read_exr(dataset / "depth" / "default.exr")["Z"]
+    assert depth.shape == (36, 64)
+    assert np.isinf(depth[0]).all()  # top row: sky
+    assert np.isfinite(depth[-1]).all() and (depth[-1] > 0).all()  # bottom row: sea
+
+
+def test_haze_brightens_and_flattens_the_sea(dataset):
+    def load(level):
+        return read_exr(dataset / "exr" / level / "default.exr")["RGB"]
+
+    clean, thin, thick = load("clean"), load("v4000"), load("v0300")
+    # Contrast between the top (sky) and the bottom (sea) rows falls as visibility falls.
+    def contrast(img):
+        return abs(img[:4].mean() - img[-4:].mean()) / img.mean()
+
+    assert contrast(thick) < contrast(thin) < contrast(clean)
+
+
+def test_same_seed_same_bytes(dataset, tmp_path):
+    code = main(["render", str(ROOT / "scenes" / "default.yaml"), "--vis", "300,4000", "--res", "64x36", "--spp", "2",
+                 "--out", str(tmp_path), "--quiet"])
+    assert code == 0
+    for rel in ["images/clean/default.png", "images/v0300/default.png", "labels/v0300/default.txt",
+                "depth/default.exr", "meta/default.json", "dataset.json"]:
+        digest = [hashlib.sha256((root / rel).read_bytes()).hexdigest() for root in (dataset, tmp_path)]
+        assert digest[0] == digest[1], rel
