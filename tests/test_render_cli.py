@@ -86,3 +86,14 @@ def test_same_seed_same_bytes(dataset, tmp_path):
                 "depth/default.exr", "meta/default.json", "dataset.json"]:
         digest = [hashlib.sha256((root / rel).read_bytes()).hexdigest() for root in (dataset, tmp_path)]
         assert digest[0] == digest[1], rel
+
+
+def test_preview_writes_a_contact_sheet(dataset, tmp_path):
+    out = tmp_path / "sheet.png"
+    assert main(["preview", str(dataset), "--levels", "clean,v0300", "--columns", "2", "--tile-width", "64", "--out", str(out)]) == 0
+    assert Image.open(out).size == (128, 36)
+
+
+def test_preview_rejects_unknown_level(dataset, capsys):
+    assert main(["preview", str(dataset), "--levels", "v9999"]) == 2
+    assert "not in" in capsys.readouterr().err

@@ -122,6 +122,25 @@ def cmd_classes(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_preview(args: argparse.Namespace) -> int:
+    """Write a contact sheet of one scene: clean and levels side by side, boxes drawn."""
+    from .preview import PreviewError, contact_sheet
+
+    root = Path(args.dataset)
+    levels = [lv.strip() for lv in args.levels.split(",")] if args.levels else None
+    if args.columns < 1 or args.tile_width < 32:
+        raise UsageError("--columns must be >= 1 and --tile-width >= 32")
+    try:
+        sheet = contact_sheet(root, args.scene, levels, args.columns, args.tile_width, not args.no_boxes)
+    except PreviewError as err:
+        raise UsageError(str(err)) from None
+    out = Path(args.out) if args.out else root / "preview.png"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    sheet.save(out)
+    print(f"wrote {out}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``seahaze`` command."""
     parser = argparse.ArgumentParser(prog="seahaze", description="Physically based maritime haze datasets with exact visibility labels.")
@@ -148,6 +167,16 @@ def build_parser() -> argparse.ArgumentParser:
     validate = sub.add_parser("validate", help="check scene files and report every problem")
     validate.add_argument("scenes", nargs="+", metavar="SCENE.yaml")
     validate.set_defaults(func=cmd_validate)
+
+    preview = sub.add_parser("preview", help="contact sheet of a scene: clean and levels side by side, boxes drawn")
+    preview.add_argument("dataset", metavar="DIR", help="dataset folder written by 'seahaze render'")
+    preview.add_argument("--scene", help="scene name (default: the first in dataset.json)")
+    preview.add_argument("--levels", metavar="L1,L2", help="levels to show, e.g. clean,v0300,v1000 (default: all)")
+    preview.add_argument("--columns", type=int, default=3, help="tiles per row (default 3)")
+    preview.add_argument("--tile-width", type=int, default=640, help="width of one tile in pixels (default 640)")
+    preview.add_argument("--no-boxes", action="store_true", help="do not draw the label boxes")
+    preview.add_argument("--out", metavar="PNG", help="output file (default: DIR/preview.png)")
+    preview.set_defaults(func=cmd_preview)
 
     classes = sub.add_parser("classes", help="list the vessel classes and their YOLO ids")
     classes.set_defaults(func=cmd_classes)

@@ -1,0 +1,82 @@
+"""Contact sheets: a scene's clean image and hazy levels side by side, boxes drawn.
+
+What a user looks at first after a render: ``seahaze preview OUT``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from PIL import Image, ImageDraw
+
+from .dataset import CLEAN, Layout
+
+BOX_COLOUR = (255, 210, 0)
+CAPTION_HEIGHT_FRACTION = 0.07
+
+
+class PreviewError(ValueError):
+    """A dataset folder that cannot be previewed; the message is for the user."""
+
+
+def dataset_levels(root: Path) -> list[str]:
+    """Level folder names of a dataset in manifest order, clean first."""
+    manifest = root / "dataset.json"
+    if not manifest.exists():
+        raise PreviewError(f"{manifest}: not found; is {root} a seahaze dataset folder?")
+    data = json.loads(manifest.read_text())
+    return [CLEAN, *(level["name"] for level in data["levels"])]
+
+
+def _read_boxes(path: Path, width: int, height: int) -> list[tuple[int, float, float, float, float]]:
+    boxes = []
+    for line in path.read_text().splitlines():
+        cls, cx, cy, w, h = line.split()[:5]
+        cx, cy, w, h = float(cx) * width, float(cy) * height, float(w) * width, float(h) * height
+        boxes.append((int(cls), cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2))
+    return boxes
+
+
+def _tile(layout: Layout, level: str, scene: str, tile_width: int, boxes: bool, names: list[str]) -> Image.Image:
+    path = layout.image(level, scene)
+    if not path.exists():
+        raise PreviewError(f"{path}: not found")
+    image = Image.open(path).convert("RGB")
+    scale = tile_width / image.width
+    tile = image.resize((tile_width, round(image.height * scale)), Image.LANCZOS)
+    draw = ImageDraw.Draw(tile)
+    label_path = layout.label(level, scene)
+    if boxes and label_path.exists():
+        for cls, x0, y0, x1, y1 in _read_boxes(label_path, image.width, image.height):
+            draw.rectangle([x0 * scale, y0 * scale, x1 * scale, y1 * scale], outline=BOX_COLOUR, width=max(1, tile_width // 400))
+            draw.text((x0 * scale, y0 * scale - 11), names[cls] if cls < len(names) else str(cls), fill=BOX_COLOUR)
+    caption = "clean" if level == CLEAN else f"V = {int(level[1:])} m"
+    bar = round(tile.height * CAPTION_HEIGHT_FRACTION)
+    draw.rectangle([0, 0, tile.width, bar], fill=(0, 0, 0))
+    draw.text((6, max(0, bar // 2 - 6)), f"{scene}  {caption}", fill=(255, 255, 255))
+    return tile
+
+
+def contact_sheet(root: Path, scene: str | None = None, levels: list[str] | None = None, columns: int = 3,
+                  tile_width: int = 640, boxes: bool = True) -> Image.Image:
+    """A grid of one scene's images (``levels``, default all) with YOLO boxes drawn."""
+    layout = Layout(root)
+    available = dataset_levels(root)
+    levels = levels or available
+    unknown = [lv for lv in levels if lv not in available]
+    if unknown:
+        raise PreviewError(f"level(s) {unknown} not in {root}; available: {', '.join(available)}")
+    manifest = json.loads((root / "dataset.json").read_text())
+    scenes = list(manifest["scenes"])
+    if not scenes:
+        raise PreviewError(f"{root}: no rendered scene yet")
+    scene = scene or scenes[0]
+    if scene not in scenes:
+        raise PreviewError(f"scene '{scene}' not in {root}; available: {', '.join(scenes)}")
+    tiles = [_tile(layout, level, scene, tile_width, boxes, manifest["classes"]) for level in levels]
+    rows = -(-len(tiles) // columns)
+    sheet = Image.new("RGB", (columns * tile_width, rows * tiles[0].height), (0, 0, 0))
+    for i, tile in enumerate(tiles):
+        sheet.paste(tile, ((i % columns) * tile_width, (i // columns) * tiles[0].height))
+    return sheet
