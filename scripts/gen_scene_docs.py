@@ -48,10 +48,20 @@ def _model_of(annotation: Any) -> type[BaseModel] | None:
 def _type_name(annotation: Any) -> str:
     text = getattr(annotation, "__name__", None) if isinstance(annotation, type) else None
     text = text or str(annotation)
-    for old, new in (("typing.", ""), ("Annotated[", ""), ("seahaze.spec.", ""), ("seahaze.visibility.", ""), ("NoneType", "null")):
+    for old, new in (
+        ("typing.", ""),
+        ("Annotated[", ""),
+        ("seahaze.spec.", ""),
+        ("seahaze.visibility.", ""),
+        ("NoneType", "null"),
+    ):
         text = text.replace(old, new)
     if "Literal" in text:
-        return "one of " + ", ".join(f"`{a}`" for a in getattr(annotation, "__args__", ()) if isinstance(a, str)) or text
+        return (
+            "one of "
+            + ", ".join(f"`{a}`" for a in getattr(annotation, "__args__", ()) if isinstance(a, str))
+            or text
+        )
     if "Threshold" in text:
         return "one of `koschmieder`, `mor`"
     if "tuple[" in text and "float" in text:
@@ -87,8 +97,14 @@ def _default(info) -> str:
 
 def section(model: type[BaseModel], path: str) -> list[str]:
     """Markdown for one section and, recursively, its sub-sections."""
-    lines = [f"## `{path}`" if path else "## Top level", "", (model.__doc__ or "").strip(), "",
-             "| key | type | unit | default | allowed | meaning |", "|---|---|---|---|---|---|"]
+    lines = [
+        f"## `{path}`" if path else "## Top level",
+        "",
+        (model.__doc__ or "").strip(),
+        "",
+        "| key | type | unit | default | allowed | meaning |",
+        "|---|---|---|---|---|---|",
+    ]
     nested = []
     for name, info in model.model_fields.items():
         key = info.alias or name
@@ -96,7 +112,11 @@ def section(model: type[BaseModel], path: str) -> list[str]:
         extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
         unit = extra.get("unit", "")
         kind = f"section `{sub.__name__}`" if sub else _type_name(info.annotation)
-        desc = (info.description or (sub.__doc__ or "").strip().splitlines()[0] if sub else info.description or "")
+        desc = (
+            info.description or (sub.__doc__ or "").strip().splitlines()[0]
+            if sub
+            else info.description or ""
+        )
         lines.append(f"| `{key}` | {kind} | {unit} | {_default(info)} | {_range(info)} | {desc} |")
         if sub:
             nested.append((sub, f"{path}.{key}" if path else key, "list" in str(info.annotation)))

@@ -21,8 +21,12 @@ def flat_sea_mesh(rings: int = 96, sectors: int = 128) -> MeshData:
     """
     radii = np.geomspace(0.5, PLANE_HALF_SIZE_M, rings)
     angles = np.linspace(0.0, 2.0 * np.pi, sectors, endpoint=False)
-    ring_xy = np.stack([np.outer(radii, np.cos(angles)), np.outer(radii, np.sin(angles))], axis=-1).reshape(-1, 2)
-    vertices = np.vstack([[0.0, 0.0, 0.0], np.column_stack([ring_xy, np.zeros(len(ring_xy))])]).astype(np.float32)
+    ring_xy = np.stack(
+        [np.outer(radii, np.cos(angles)), np.outer(radii, np.sin(angles))], axis=-1
+    ).reshape(-1, 2)
+    vertices = np.vstack(
+        [[0.0, 0.0, 0.0], np.column_stack([ring_xy, np.zeros(len(ring_xy))])]
+    ).astype(np.float32)
     faces = [[0, 1 + s, 1 + (s + 1) % sectors] for s in range(sectors)]
     for r in range(rings - 1):
         for s in range(sectors):
@@ -31,13 +35,21 @@ def flat_sea_mesh(rings: int = 96, sectors: int = 128) -> MeshData:
     return MeshData("sea", vertices, np.array(faces, np.uint32))
 
 
-def box_vessel(index: int, center: tuple[float, float, float], size: tuple[float, float, float]) -> VesselInstance:
+def box_vessel(
+    index: int, center: tuple[float, float, float], size: tuple[float, float, float]
+) -> VesselInstance:
     """An axis-aligned box standing in for a vessel (class id 0)."""
     import trimesh
 
     box = trimesh.creation.box(size)
     box.apply_translation(center)
-    part = MeshData(f"vessel{index:03d}_hull", box.vertices.astype(np.float32), box.faces.astype(np.uint32), (0.3, 0.1, 0.1), 0.4)
+    part = MeshData(
+        f"vessel{index:03d}_hull",
+        box.vertices.astype(np.float32),
+        box.faces.astype(np.uint32),
+        (0.3, 0.1, 0.1),
+        0.4,
+    )
     return VesselInstance(index, "box", 0, None, size[0], size[1], size[2], 0.0, [part])
 
 

@@ -27,15 +27,19 @@ from seahaze.metric.evaluate import build_coco, coco_scores
 NAMES = ["container_ship", "fishing_boat", "buoy"]
 
 # Two scenes, four class-0 objects in all (normalised cx, cy, w, h).
-OBJECTS = {"a": [(0.2, 0.3, 0.1, 0.1), (0.6, 0.5, 0.2, 0.1)],
-           "b": [(0.3, 0.7, 0.1, 0.2), (0.8, 0.2, 0.1, 0.1)]}
+OBJECTS = {
+    "a": [(0.2, 0.3, 0.1, 0.1), (0.6, 0.5, 0.2, 0.1)],
+    "b": [(0.3, 0.7, 0.1, 0.2), (0.8, 0.2, 0.1, 0.1)],
+}
 FAR = (0.95, 0.95, 0.05, 0.05)  # overlaps no object
 
 
 def _truth(sizes: dict[str, tuple[int, int]] | None = None) -> list[ImageTruth]:
     sizes = sizes or {"a": (200, 100), "b": (160, 120)}
-    return [ImageTruth(name, *sizes[name], tuple(YoloBox(0, *box) for box in boxes))
-            for name, boxes in OBJECTS.items()]
+    return [
+        ImageTruth(name, *sizes[name], tuple(YoloBox(0, *box) for box in boxes))
+        for name, boxes in OBJECTS.items()
+    ]
 
 
 def _pred(box: tuple[float, float, float, float], conf: float, cls: int = 0) -> YoloBox:
@@ -99,16 +103,19 @@ def test_mean_over_classes_with_ground_truth() -> None:
     preds = copy.deepcopy(HALF_MISSED)
     preds["a"] += [YoloBox(1, 0.5, 0.2, 0.1, 0.1, 0.3), _pred(FAR, 0.99, cls=2)]
     s = coco_scores(truth, preds, NAMES)
-    assert s.ap50_per_class == {"container_ship": pytest.approx(AP_HALF_MISSED),
-                                "fishing_boat": pytest.approx(1.0)}
+    assert s.ap50_per_class == {
+        "container_ship": pytest.approx(AP_HALF_MISSED),
+        "fishing_boat": pytest.approx(1.0),
+    }
     assert s.map50 == pytest.approx((1 + AP_HALF_MISSED) / 2)
 
 
 def test_max_dets_keeps_the_most_confident() -> None:
     # One object; two confident false positives rank above the true positive.
     truth = [ImageTruth("a", 100, 100, (YoloBox(0, 0.5, 0.5, 0.2, 0.2),))]
-    preds = {"a": [_pred(FAR, 0.9), _pred((0.1, 0.1, 0.1, 0.1), 0.8),
-                   _pred((0.5, 0.5, 0.2, 0.2), 0.7)]}
+    preds = {
+        "a": [_pred(FAR, 0.9), _pred((0.1, 0.1, 0.1, 0.1), 0.8), _pred((0.5, 0.5, 0.2, 0.2), 0.7)]
+    }
     assert coco_scores(truth, preds, NAMES).map50 == pytest.approx(1 / 3)  # precision 1/3
     assert coco_scores(truth, preds, NAMES, max_dets=2).map50 == 0.0
 
@@ -127,16 +134,33 @@ def _random_set(seed: int) -> tuple[list[ImageTruth], dict[str, list[YoloBox]]]:
     rng = random.Random(seed)
     truth, preds = [], {}
     for i in range(25):
-        boxes = tuple(YoloBox(rng.randrange(3), rng.uniform(0.2, 0.8), rng.uniform(0.2, 0.8),
-                              rng.uniform(0.05, 0.3), rng.uniform(0.05, 0.3))
-                      for _ in range(rng.randrange(0, 5)))
+        boxes = tuple(
+            YoloBox(
+                rng.randrange(3),
+                rng.uniform(0.2, 0.8),
+                rng.uniform(0.2, 0.8),
+                rng.uniform(0.05, 0.3),
+                rng.uniform(0.05, 0.3),
+            )
+            for _ in range(rng.randrange(0, 5))
+        )
         truth.append(ImageTruth(f"s{i}", rng.choice([640, 320]), rng.choice([480, 240]), boxes))
-        found = [YoloBox(b.class_id if rng.random() > 0.1 else rng.randrange(3),
-                         b.cx + rng.gauss(0, 0.02), b.cy + rng.gauss(0, 0.02),
-                         b.w * rng.uniform(0.8, 1.2), b.h * rng.uniform(0.8, 1.2),
-                         rng.random()) for b in boxes if rng.random() > 0.3]
-        found += [YoloBox(rng.randrange(3), rng.random(), rng.random(), 0.1, 0.1, rng.random())
-                  for _ in range(rng.randrange(0, 3))]
+        found = [
+            YoloBox(
+                b.class_id if rng.random() > 0.1 else rng.randrange(3),
+                b.cx + rng.gauss(0, 0.02),
+                b.cy + rng.gauss(0, 0.02),
+                b.w * rng.uniform(0.8, 1.2),
+                b.h * rng.uniform(0.8, 1.2),
+                rng.random(),
+            )
+            for b in boxes
+            if rng.random() > 0.3
+        ]
+        found += [
+            YoloBox(rng.randrange(3), rng.random(), rng.random(), 0.1, 0.1, rng.random())
+            for _ in range(rng.randrange(0, 3))
+        ]
         preds[f"s{i}"] = found
     return truth, preds
 
@@ -173,8 +197,10 @@ def _write_yolo(path: Path, rows: Sequence[Sequence[float]]) -> None:
 
 def _write_preds(root: Path, level: str, preds: dict[str, list[YoloBox]]) -> None:
     for name, boxes in preds.items():
-        _write_yolo(root / level / f"{name}.txt",
-                    [(b.class_id, b.cx, b.cy, b.w, b.h, b.conf) for b in boxes])
+        _write_yolo(
+            root / level / f"{name}.txt",
+            [(b.class_id, b.cx, b.cy, b.w, b.h, b.conf) for b in boxes],
+        )
 
 
 @pytest.fixture
@@ -189,8 +215,9 @@ def dataset(tmp_path: Path) -> Path:
         (root / "images" / level).mkdir(parents=True)
         for name, size in (("a", (40, 20)), ("b", (32, 24))):
             Image.new("RGB", size).save(root / "images" / level / f"{name}.png")
-            _write_yolo(root / "labels" / level / f"{name}.txt",
-                        [(0, *box) for box in OBJECTS[name]])
+            _write_yolo(
+                root / "labels" / level / f"{name}.txt", [(0, *box) for box in OBJECTS[name]]
+            )
     return root
 
 
@@ -198,8 +225,12 @@ def dataset(tmp_path: Path) -> Path:
 def detector_preds(tmp_path: Path) -> Path:
     """A detector's predictions on the hazy levels: worse in denser haze (monotone table)."""
     root = tmp_path / "pred"
-    for level, preds in (("clean", PERFECT), ("v0300", HALF_MISSED),
-                         ("v0500", THREE_OF_FOUR), ("v1000", PERFECT)):
+    for level, preds in (
+        ("clean", PERFECT),
+        ("v0300", HALF_MISSED),
+        ("v0500", THREE_OF_FOUR),
+        ("v1000", PERFECT),
+    ):
         _write_preds(root, level, preds)
     return root
 
@@ -216,34 +247,72 @@ def test_load_dataset_reads_sizes_from_png(dataset: Path) -> None:
     assert ds.names == tuple(NAMES) and ds.levels == LEVELS
     truth = load_level_truth(ds, "v0300")
     assert [(t.name, t.width, t.height, len(t.boxes)) for t in truth] == [
-        ("a", 40, 20, 2), ("b", 32, 24, 2)]
+        ("a", 40, 20, 2),
+        ("b", 32, 24, 2),
+    ]
 
 
-def test_cli_eval(dataset: Path, detector_preds: Path,
-                  capsys: pytest.CaptureFixture[str]) -> None:
-    assert _run(["metric", "eval", "--dataset", str(dataset), "--pred", str(detector_preds),
-                 "--json"]) == 0
+def test_cli_eval(dataset: Path, detector_preds: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert (
+        _run(["metric", "eval", "--dataset", str(dataset), "--pred", str(detector_preds), "--json"])
+        == 0
+    )
     doc = json.loads(capsys.readouterr().out)
     got = {lv["level"]: lv["map50"] for lv in doc["levels"]}
-    assert got == {"clean": pytest.approx(1.0), "v0300": pytest.approx(AP_HALF_MISSED),
-                   "v0500": pytest.approx(AP_THREE_OF_FOUR), "v1000": pytest.approx(1.0)}
-    assert _run(["metric", "eval", "--dataset", str(dataset), "--pred",
-                 str(detector_preds / "v0300"), "--level", "300"]) == 0
+    assert got == {
+        "clean": pytest.approx(1.0),
+        "v0300": pytest.approx(AP_HALF_MISSED),
+        "v0500": pytest.approx(AP_THREE_OF_FOUR),
+        "v1000": pytest.approx(1.0),
+    }
+    assert (
+        _run(
+            [
+                "metric",
+                "eval",
+                "--dataset",
+                str(dataset),
+                "--pred",
+                str(detector_preds / "v0300"),
+                "--level",
+                "300",
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert "v0300" in out and f"{AP_HALF_MISSED:.4f}" in out and "v0500" not in out
 
 
-def test_cli_calibrate_then_newvis(dataset: Path, detector_preds: Path, tmp_path: Path,
-                                   capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_calibrate_then_newvis(
+    dataset: Path, detector_preds: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     out = tmp_path / "tables" / "toy"
-    assert _run(["metric", "calibrate", "--dataset", str(dataset), "--pred",
-                 str(detector_preds), "--detector", "toy-det", "--out", str(out)]) == 0
+    assert (
+        _run(
+            [
+                "metric",
+                "calibrate",
+                "--dataset",
+                str(dataset),
+                "--pred",
+                str(detector_preds),
+                "--detector",
+                "toy-det",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     capsys.readouterr()
     rows = (tmp_path / "tables" / "toy.csv").read_text().splitlines()
     assert rows[0] == "visibility_m,map50"
     assert [tuple(map(float, r.split(","))) for r in rows[1:]] == [
-        (300, pytest.approx(AP_HALF_MISSED)), (500, pytest.approx(AP_THREE_OF_FOUR)),
-        (1000, pytest.approx(1.0))]
+        (300, pytest.approx(AP_HALF_MISSED)),
+        (500, pytest.approx(AP_THREE_OF_FOUR)),
+        (1000, pytest.approx(1.0)),
+    ]
     doc = json.loads((tmp_path / "tables" / "toy.json").read_text())
     assert doc["detector"] == "toy-det" and doc["clean"]["map50"] == pytest.approx(1.0)
     assert doc["evaluator"].startswith("faster_coco_eval")
@@ -252,16 +321,34 @@ def test_cli_calibrate_then_newvis(dataset: Path, detector_preds: Path, tmp_path
     # Dehazed v0300 images on which the detector does as well as at 500 m -> 500 m, +200 m.
     dehazed = tmp_path / "dehazed"
     _write_preds(dehazed, "v0300", THREE_OF_FOUR)
-    assert _run(["metric", "newvis", "--table", str(out) + ".json", "--pred",
-                 str(dehazed), "--dataset", str(dataset), "--level", "v0300", "--json"]) == 0
+    assert (
+        _run(
+            [
+                "metric",
+                "newvis",
+                "--table",
+                str(out) + ".json",
+                "--pred",
+                str(dehazed),
+                "--dataset",
+                str(dataset),
+                "--level",
+                "v0300",
+                "--json",
+            ]
+        )
+        == 0
+    )
     captured = capsys.readouterr()
     result = json.loads(captured.out)
     assert result["visibility_m"] == pytest.approx(500) and result["gain_m"] == pytest.approx(200)
     assert result["regulation"]["key"] == "restricted" and captured.err == ""
 
     # Eq. 5 between (300 m, 34/101) and (500 m, 57/101): 0.5 -> 300 + 16.5/23 * 200 m.
-    assert _run(["metric", "newvis", "--table", str(out) + ".csv", "--map", "0.5",
-                 "--level", "300"]) == 0
+    assert (
+        _run(["metric", "newvis", "--table", str(out) + ".csv", "--map", "0.5", "--level", "300"])
+        == 0
+    )
     text = capsys.readouterr().out
     assert f"new visibility: {round(300 + 16.5 / 23 * 200)} m" in text
     assert "Strict navigation restrictions" in text
@@ -275,37 +362,48 @@ def _error_line(capsys: pytest.CaptureFixture[str]) -> str:
     return lines[0]
 
 
-@pytest.mark.parametrize(("line", "message"), [
-    ("0 0.5 0.5 0.1 0.1", "a.txt:2: expected 6 values 'class cx cy w h conf', got 5"),
-    ("0 0.5 0.5 0.1 0.1 0.9 7", "a.txt:2: expected 6 values"),
-    ("3 0.5 0.5 0.1 0.1 0.9", "a.txt:2: class 3 out of range; data.yaml names 3 classes"),
-    ("x 0.5 0.5 0.1 0.1 0.9", "a.txt:2: class must be an integer in 0..2, got 'x'"),
-    ("0 0.5 abc 0.1 0.1 0.9", "a.txt:2: cy must be a number, got 'abc'"),
-    ("0 0.5 0.5 0.1 0.1 nan", "a.txt:2: conf must be a number in [0, 1]"),
-    ("0 1.5 0.5 0.1 0.1 0.9", "a.txt:2: cx must be a number in [0, 1]"),
-])
-def test_cli_malformed_prediction_lines(dataset: Path, tmp_path: Path, line: str, message: str,
-                                        capsys: pytest.CaptureFixture[str]) -> None:
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        ("0 0.5 0.5 0.1 0.1", "a.txt:2: expected 6 values 'class cx cy w h conf', got 5"),
+        ("0 0.5 0.5 0.1 0.1 0.9 7", "a.txt:2: expected 6 values"),
+        ("3 0.5 0.5 0.1 0.1 0.9", "a.txt:2: class 3 out of range; data.yaml names 3 classes"),
+        ("x 0.5 0.5 0.1 0.1 0.9", "a.txt:2: class must be an integer in 0..2, got 'x'"),
+        ("0 0.5 abc 0.1 0.1 0.9", "a.txt:2: cy must be a number, got 'abc'"),
+        ("0 0.5 0.5 0.1 0.1 nan", "a.txt:2: conf must be a number in [0, 1]"),
+        ("0 1.5 0.5 0.1 0.1 0.9", "a.txt:2: cx must be a number in [0, 1]"),
+    ],
+)
+def test_cli_malformed_prediction_lines(
+    dataset: Path, tmp_path: Path, line: str, message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     pred = tmp_path / "bad"
     pred.mkdir()
     (pred / "a.txt").write_text(f"0 0.2 0.3 0.1 0.1 0.9\n{line}\n")
-    assert _run(["metric", "eval", "--dataset", str(dataset), "--pred", str(pred),
-                 "--level", "v0300"]) == 2
+    assert (
+        _run(["metric", "eval", "--dataset", str(dataset), "--pred", str(pred), "--level", "v0300"])
+        == 2
+    )
     err = _error_line(capsys)
     assert err.startswith("seahaze metric eval: error: ") and message in err
 
 
-def test_cli_bad_dataset_and_layout(dataset: Path, detector_preds: Path, tmp_path: Path,
-                                    capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_bad_dataset_and_layout(
+    dataset: Path, detector_preds: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     def fails(argv: list[str], message: str) -> None:
         assert _run(["metric", *argv]) == 2
         assert message in _error_line(capsys)
 
     ds, pred = str(dataset), str(detector_preds)
-    fails(["eval", "--dataset", str(tmp_path / "none"), "--pred", pred],
-          "none: dataset folder not found")
-    fails(["eval", "--dataset", ds, "--pred", pred, "--level", "v0400"],
-          "level 'v0400' not in the dataset")
+    fails(
+        ["eval", "--dataset", str(tmp_path / "none"), "--pred", pred],
+        "none: dataset folder not found",
+    )
+    fails(
+        ["eval", "--dataset", ds, "--pred", pred, "--level", "v0400"],
+        "level 'v0400' not in the dataset",
+    )
     (detector_preds / "v0500" / "zzz.txt").write_text("")
     fails(["eval", "--dataset", ds, "--pred", pred], "zzz.txt: prediction for a scene that")
     (detector_preds / "v0500" / "zzz.txt").unlink()
@@ -319,25 +417,56 @@ def test_cli_bad_dataset_and_layout(dataset: Path, detector_preds: Path, tmp_pat
     fails(["eval", "--dataset", ds, "--pred", pred], "data.yaml: missing")
 
 
-def test_cli_calibrate_needs_every_hazy_level(dataset: Path, detector_preds: Path,
-                                              tmp_path: Path,
-                                              capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_calibrate_needs_every_hazy_level(
+    dataset: Path, detector_preds: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     for f in (detector_preds / "v0500").iterdir():
         f.unlink()
     (detector_preds / "v0500").rmdir()
-    assert _run(["metric", "calibrate", "--dataset", str(dataset), "--pred",
-                 str(detector_preds), "--detector", "d", "--out", str(tmp_path / "t")]) == 2
+    assert (
+        _run(
+            [
+                "metric",
+                "calibrate",
+                "--dataset",
+                str(dataset),
+                "--pred",
+                str(detector_preds),
+                "--detector",
+                "d",
+                "--out",
+                str(tmp_path / "t"),
+            ]
+        )
+        == 2
+    )
     assert "v0500: missing, but" in _error_line(capsys)
     assert not (tmp_path / "t.csv").exists()
 
 
-def test_cli_calibrate_reports_non_monotone(dataset: Path, tmp_path: Path,
-                                           capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_calibrate_reports_non_monotone(
+    dataset: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     pred = tmp_path / "p"
     for level, preds in (("v0300", THREE_OF_FOUR), ("v0500", HALF_MISSED), ("v1000", PERFECT)):
         _write_preds(pred, level, preds)
-    assert _run(["metric", "calibrate", "--dataset", str(dataset), "--pred", str(pred),
-                 "--detector", "d", "--out", str(tmp_path / "t")]) == 0
+    assert (
+        _run(
+            [
+                "metric",
+                "calibrate",
+                "--dataset",
+                str(dataset),
+                "--pred",
+                str(pred),
+                "--detector",
+                "d",
+                "--out",
+                str(tmp_path / "t"),
+            ]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
     assert "table is not monotone" in err and "300 m" in err and "500 m" in err
 

@@ -35,8 +35,10 @@ def _table2_rows() -> list[dict[str, str]]:
 
 def _baseline():
     rows = [r for r in _table2_rows() if r["method"] == "Baseline"]
-    return make_table([CalibrationPoint(float(r["visibility_m"]), float(r["map50"]))
-                       for r in rows], detector="YOLO11 (paper)")
+    return make_table(
+        [CalibrationPoint(float(r["visibility_m"]), float(r["map50"])) for r in rows],
+        detector="YOLO11 (paper)",
+    )
 
 
 METHOD_ROWS = [r for r in _table2_rows() if r["method"] != "Baseline"]
@@ -51,7 +53,7 @@ def test_transcription_has_every_entry() -> None:
 @pytest.mark.skipif(not PAPER.is_file(), reason="paper LaTeX not available")
 def test_transcription_matches_the_paper_latex() -> None:
     tex = PAPER.read_text(encoding="utf-8")
-    block = tex[tex.index(r"\label{tab2}"):tex.index(r"\end{tabularx}")]
+    block = tex[tex.index(r"\label{tab2}") : tex.index(r"\end{tabularx}")]
     baseline = re.findall(r"\\textbf\{(0\.\d+)\}", block)
     assert baseline == [f"{p.map50:.3f}" for p in _baseline().points]
     cells = re.findall(r"\\viscell\{(\d+)\}\{([+-]\d+)\}|&\s*(-)\s*(?:\\\\|\n)", block)
@@ -63,8 +65,9 @@ def test_transcription_matches_the_paper_latex() -> None:
     assert paper_new == [(r["new_vis_m"], r["gain_m"]) for r in METHOD_ROWS]
 
 
-@pytest.mark.parametrize("row", METHOD_ROWS,
-                         ids=[f"{r['method']}-{r['visibility_m']}" for r in METHOD_ROWS])
+@pytest.mark.parametrize(
+    "row", METHOD_ROWS, ids=[f"{r['method']}-{r['visibility_m']}" for r in METHOD_ROWS]
+)
 def test_table2_new_visibility(row: dict[str, str]) -> None:
     """Every New Vis entry of Table 2 from the baseline row and the method's mAP50."""
     level = float(row["visibility_m"])
@@ -159,19 +162,25 @@ def test_monotone_table_equals_eq5_on_every_interval() -> None:
     for lo, hi in pairwise(pts):
         mid = (lo.map50 + hi.map50) / 2
         assert new_visibility(table, mid).visibility_m == pytest.approx(
-            (lo.visibility_m + hi.visibility_m) / 2)
+            (lo.visibility_m + hi.visibility_m) / 2
+        )
 
 
 # ---------------------------------------------------------------- files
 
 
 def test_save_and_load_round_trip(tmp_path: Path) -> None:
-    table = make_table([CalibrationPoint(800, 0.424, level="v0800"),
-                        CalibrationPoint(300, 1 / 3)], detector="yolo11n")
+    table = make_table(
+        [CalibrationPoint(800, 0.424, level="v0800"), CalibrationPoint(300, 1 / 3)],
+        detector="yolo11n",
+    )
     csv_path, json_path = save_table(table, tmp_path / "sub" / "t.json")
     assert (csv_path.name, json_path.name) == ("t.csv", "t.json")
     assert csv_path.read_text().splitlines() == [
-        "visibility_m,map50", f"300,{1 / 3!r}", "800,0.424"]
+        "visibility_m,map50",
+        f"300,{1 / 3!r}",
+        "800,0.424",
+    ]
     doc = json.loads(json_path.read_text())
     assert doc["detector"] == "yolo11n" and doc["levels"][1]["level"] == "v0800"
     assert load_table(json_path) == table
@@ -179,16 +188,19 @@ def test_save_and_load_round_trip(tmp_path: Path) -> None:
     assert load_table(tmp_path / "sub" / "t").detector == "yolo11n"  # no suffix: JSON first
 
 
-@pytest.mark.parametrize(("text", "message"), [
-    ("visibility_m,map50\n300,0.1\n", r"t\.csv: .*at least 2 levels"),
-    ("visibility_m,map50\n300,0.1\n400,abc\n", r"t\.csv:3: map50 must be a number"),
-    ("visibility_m,map50\n300,0.1\n400\n", r"t\.csv:3: expected 2 comma-separated"),
-    ("vis,map\n300,0.1\n400,0.2\n", r"t\.csv:1: header must name the columns"),
-    ("visibility_m,map50\n300,0.1\n400,1.2\n", r"t\.csv:3: map50 must be in \[0, 1\]"),
-    ("visibility_m,map50\n300,0.1\n-400,0.2\n", r"t\.csv:3: visibility_m must be > 0"),
-    ("visibility_m,map50\n300,0.1\n300,0.2\n", r"t\.csv: visibility 300 m appears twice"),
-    ("", r"t\.csv: empty table"),
-])
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("visibility_m,map50\n300,0.1\n", r"t\.csv: .*at least 2 levels"),
+        ("visibility_m,map50\n300,0.1\n400,abc\n", r"t\.csv:3: map50 must be a number"),
+        ("visibility_m,map50\n300,0.1\n400\n", r"t\.csv:3: expected 2 comma-separated"),
+        ("vis,map\n300,0.1\n400,0.2\n", r"t\.csv:1: header must name the columns"),
+        ("visibility_m,map50\n300,0.1\n400,1.2\n", r"t\.csv:3: map50 must be in \[0, 1\]"),
+        ("visibility_m,map50\n300,0.1\n-400,0.2\n", r"t\.csv:3: visibility_m must be > 0"),
+        ("visibility_m,map50\n300,0.1\n300,0.2\n", r"t\.csv: visibility 300 m appears twice"),
+        ("", r"t\.csv: empty table"),
+    ],
+)
 def test_bad_csv_tables(tmp_path: Path, text: str, message: str) -> None:
     path = tmp_path / "t.csv"
     path.write_text(text)
@@ -225,8 +237,10 @@ def paper_table(tmp_path: Path) -> Path:
 
 
 def test_cli_newvis_worked_example(paper_table: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert _run(["metric", "newvis", "--table", str(paper_table), "--map", "0.588",
-                 "--level", "800"]) == 0
+    assert (
+        _run(["metric", "newvis", "--table", str(paper_table), "--map", "0.588", "--level", "800"])
+        == 0
+    )
     out = capsys.readouterr().out
     assert "new visibility: 2009 m" in out
     assert "gain: +1209 m over 800 m" in out
@@ -234,19 +248,38 @@ def test_cli_newvis_worked_example(paper_table: Path, capsys: pytest.CaptureFixt
 
 
 def test_cli_newvis_bounds(paper_table: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert _run(["metric", "newvis", "--table", str(paper_table), "--map", "0.733",
-                 "--level", "v4000"]) == 0
+    assert (
+        _run(
+            ["metric", "newvis", "--table", str(paper_table), "--map", "0.733", "--level", "v4000"]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert "new visibility: > 4000 m" in out and "the paper prints '-'" in out
-    assert _run(["metric", "newvis", "--table", str(paper_table), "--map", "0.074",
-                 "--level", "300", "--json"]) == 0
+    assert (
+        _run(
+            [
+                "metric",
+                "newvis",
+                "--table",
+                str(paper_table),
+                "--map",
+                "0.074",
+                "--level",
+                "300",
+                "--json",
+            ]
+        )
+        == 0
+    )
     doc = json.loads(capsys.readouterr().out)
     assert doc["bound"] == "below" and doc["visibility_m"] == 300
     assert doc["regulation"]["qualifier"] == "at most"
 
 
-def test_cli_newvis_warns_on_non_monotone(tmp_path: Path,
-                                          capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_newvis_warns_on_non_monotone(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     path = tmp_path / "t.csv"
     path.write_text("visibility_m,map50\n" + "".join(f"{v},{m}\n" for v, m in NON_MONOTONE))
     assert _run(["metric", "newvis", "--table", str(path), "--map", "0.35"]) == 0
@@ -255,14 +288,18 @@ def test_cli_newvis_warns_on_non_monotone(tmp_path: Path,
     assert "table is not monotone" in captured.err and "400 m" in captured.err
 
 
-@pytest.mark.parametrize(("argv", "message"), [
-    (["--map", "2"], "mAP50 must be a number in [0, 1]"),
-    (["--map", "0.5", "--level", "abc"], "--level 'abc'"),
-    ([], "give either --map VALUE or --pred DIR"),
-    (["--pred", "x"], "--pred needs --dataset DIR and --level"),
-])
-def test_cli_newvis_bad_input(paper_table: Path, capsys: pytest.CaptureFixture[str],
-                              argv: list[str], message: str) -> None:
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--map", "2"], "mAP50 must be a number in [0, 1]"),
+        (["--map", "0.5", "--level", "abc"], "--level 'abc'"),
+        ([], "give either --map VALUE or --pred DIR"),
+        (["--pred", "x"], "--pred needs --dataset DIR and --level"),
+    ],
+)
+def test_cli_newvis_bad_input(
+    paper_table: Path, capsys: pytest.CaptureFixture[str], argv: list[str], message: str
+) -> None:
     assert _run(["metric", "newvis", "--table", str(paper_table), *argv]) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err

@@ -21,8 +21,21 @@ LEVELS = ["v0300", "v4000"]
 @pytest.fixture(scope="module")
 def dataset(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("ds")
-    code = main(["render", str(ROOT / "scenes" / "default.yaml"), "--vis", "300,4000", "--res", "64x36", "--spp", "2",
-                 "--out", str(out), "--quiet"])
+    code = main(
+        [
+            "render",
+            str(ROOT / "scenes" / "default.yaml"),
+            "--vis",
+            "300,4000",
+            "--res",
+            "64x36",
+            "--spp",
+            "2",
+            "--out",
+            str(out),
+            "--quiet",
+        ]
+    )
     assert code == 0
     return out
 
@@ -39,7 +52,9 @@ def test_layout_is_complete(dataset):
 
 
 def test_labels_are_identical_at_every_level(dataset):
-    texts = {(dataset / "labels" / level / "default.txt").read_text() for level in ["clean", *LEVELS]}
+    texts = {
+        (dataset / "labels" / level / "default.txt").read_text() for level in ["clean", *LEVELS]
+    }
     assert len(texts) == 1
 
 
@@ -71,6 +86,7 @@ def test_haze_brightens_and_flattens_the_sea(dataset):
         return read_exr(dataset / "exr" / level / "default.exr")["RGB"]
 
     clean, thin, thick = load("clean"), load("v4000"), load("v0300")
+
     # Contrast between the top (sky) and the bottom (sea) rows falls as visibility falls.
     def contrast(img):
         return abs(img[:4].mean() - img[-4:].mean()) / img.mean()
@@ -79,18 +95,55 @@ def test_haze_brightens_and_flattens_the_sea(dataset):
 
 
 def test_same_seed_same_bytes(dataset, tmp_path):
-    code = main(["render", str(ROOT / "scenes" / "default.yaml"), "--vis", "300,4000", "--res", "64x36", "--spp", "2",
-                 "--out", str(tmp_path), "--quiet"])
+    code = main(
+        [
+            "render",
+            str(ROOT / "scenes" / "default.yaml"),
+            "--vis",
+            "300,4000",
+            "--res",
+            "64x36",
+            "--spp",
+            "2",
+            "--out",
+            str(tmp_path),
+            "--quiet",
+        ]
+    )
     assert code == 0
-    for rel in ["images/clean/default.png", "images/v0300/default.png", "labels/v0300/default.txt",
-                "depth/default.exr", "meta/default.json", "dataset.json"]:
-        digest = [hashlib.sha256((root / rel).read_bytes()).hexdigest() for root in (dataset, tmp_path)]
+    for rel in [
+        "images/clean/default.png",
+        "images/v0300/default.png",
+        "labels/v0300/default.txt",
+        "depth/default.exr",
+        "meta/default.json",
+        "dataset.json",
+    ]:
+        digest = [
+            hashlib.sha256((root / rel).read_bytes()).hexdigest() for root in (dataset, tmp_path)
+        ]
         assert digest[0] == digest[1], rel
 
 
 def test_preview_writes_a_contact_sheet(dataset, tmp_path):
     out = tmp_path / "sheet.png"
-    assert main(["preview", str(dataset), "--levels", "clean,v0300", "--columns", "2", "--tile-width", "64", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "preview",
+                str(dataset),
+                "--levels",
+                "clean,v0300",
+                "--columns",
+                "2",
+                "--tile-width",
+                "64",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert Image.open(out).size == (128, 36)
 
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import box_vessel, load_flat_scene, small_spec
 
+from conftest import box_vessel, load_flat_scene, small_spec
 from seahaze.labels import boxes_from_instances
 from seahaze.render import passes
 from seahaze.render.mitsuba_scene import HAZE_BOTTOM_M
@@ -80,8 +80,18 @@ def test_labels_agree_with_projected_box_at_160x90():
     loaded, camera = load_flat_scene(spec, vessels=[box_vessel(0, center, size)])
     geo = passes.render_geometry(loaded)
     (box,) = boxes_from_instances(geo.instance, [0])
-    corners = np.array([[center[0] + sx * size[0] / 2, center[1] + sy * size[1] / 2, center[2] + sz * size[2] / 2]
-                        for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    corners = np.array(
+        [
+            [
+                center[0] + sx * size[0] / 2,
+                center[1] + sy * size[1] / 2,
+                center[2] + sz * size[2] / 2,
+            ]
+            for sx in (-1, 1)
+            for sy in (-1, 1)
+            for sz in (-1, 1)
+        ]
+    )
     u, v, _ = camera.project(corners)
     projected = np.array([u.min(), v.min(), u.max(), v.max()])
     measured = np.array([box.x0, box.y0, box.x1, box.y1])
@@ -92,7 +102,11 @@ def test_labels_agree_with_projected_box_at_160x90():
 @pytest.mark.parametrize("mode", ["reference", "asm"])
 def test_extreme_visibilities_give_finite_non_negative_images(visibility, mode):
     spec = small_spec(camera={"resolution": [32, 18]})
-    loaded, _ = load_flat_scene(spec, vessels=[box_vessel(0, (300.0, 0.0, 5.0), (40.0, 10.0, 10.0))], visibilities=(visibility,))
+    loaded, _ = load_flat_scene(
+        spec,
+        vessels=[box_vessel(0, (300.0, 0.0, 5.0), (40.0, 10.0, 10.0))],
+        visibilities=(visibility,),
+    )
     sigma = extinction_coefficient(visibility)
     if mode == "reference":
         image = passes.render_reference_level(loaded, sigma, 0.998, 0.75, 2, 3, 0)

@@ -25,20 +25,45 @@ def test_empty_file_gives_all_defaults():
 
 BAD_SCENES = [
     # (yaml text, expected line, field, words the message must contain)
-    ("camera:\n  height_m: -3\n", 2, "camera.height_m", ["greater than or equal", "allowed", "in m"]),
+    (
+        "camera:\n  height_m: -3\n",
+        2,
+        "camera.height_m",
+        ["greater than or equal", "allowed", "in m"],
+    ),
     ("camera:\n  heigth_m: 10\n", 2, "camera.heigth_m", ["unknown key", "height_m"]),
     ("sun:\n  elevation_deg: 95\n", 2, "sun.elevation_deg", ["less than or equal", "89.5"]),
     ("haze:\n  threshold: fog\n", 2, "haze.threshold", ["koschmieder", "mor"]),
     ("haze:\n  albedo: 1.5\n", 2, "haze.albedo", ["less than or equal to 1"]),
     ("haze:\n  levels: [300, -1]\n", 2, "haze.levels[1]", ["greater than 0"]),
-    ("camera:\n  resolution: [640]\n", 2, "camera.resolution[1]", ["missing list item 2", "width and height"]),
+    (
+        "camera:\n  resolution: [640]\n",
+        2,
+        "camera.resolution[1]",
+        ["missing list item 2", "width and height"],
+    ),
     ("render:\n  mode: fast\n", 2, "render.mode", ["reference", "asm"]),
     ("render:\n  spp: lots\n", 2, "render.spp", ["integer"]),
     ("sea:\n  model: wavy\n", 2, "sea.model", ["flat", "gerstner", "fft"]),
     ("camera: {fov_deg: 60}\ncamera: {fov_deg: 30}\n", 2, "camera", ["duplicate key"]),
-    ("vessels:\n  placed:\n    - {class: submarine, distance_m: 500}\n", 3, "vessels.placed[0].class", ["unknown vessel class", "tug"]),
-    ("vessels:\n  placed:\n    - {class: tug, distance_m: 500, length_m: 400}\n", 3, "vessels.placed[0].length_m", ["outside the tug range"]),
-    ("vessels:\n  sample: {count: 3, distance_m: [4000, 100]}\n", 2, "vessels.sample", ["near < far"]),
+    (
+        "vessels:\n  placed:\n    - {class: submarine, distance_m: 500}\n",
+        3,
+        "vessels.placed[0].class",
+        ["unknown vessel class", "tug"],
+    ),
+    (
+        "vessels:\n  placed:\n    - {class: tug, distance_m: 500, length_m: 400}\n",
+        3,
+        "vessels.placed[0].length_m",
+        ["outside the tug range"],
+    ),
+    (
+        "vessels:\n  sample: {count: 3, distance_m: [4000, 100]}\n",
+        2,
+        "vessels.sample",
+        ["near < far"],
+    ),
     ("haze:\n  top_m: .nan\n", 2, "haze.top_m", ["finite"]),
     ("camera: [1, 2]\n", 1, "camera", ["valid dictionary"]),
     ("camera:\n  height_m: 10\n   pitch_deg: 3\n", 3, "", ["not valid YAML"]),
@@ -83,9 +108,14 @@ def test_validate_command_accepts_default(capsys):
     assert "ok: default" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("args", [["--vis", "abc"], ["--vis", "4000..300"], ["--vis", "0"], ["--res", "100"], ["--spp", "0"]])
+@pytest.mark.parametrize(
+    "args",
+    [["--vis", "abc"], ["--vis", "4000..300"], ["--vis", "0"], ["--res", "100"], ["--spp", "0"]],
+)
 def test_render_rejects_bad_arguments_with_exit_2(args, capsys, tmp_path):
-    assert main(["render", str(ROOT / "scenes" / "default.yaml"), "--out", str(tmp_path), *args]) == 2
+    assert (
+        main(["render", str(ROOT / "scenes" / "default.yaml"), "--out", str(tmp_path), *args]) == 2
+    )
     err = capsys.readouterr().err
     assert err.startswith("seahaze: error:") and len(err.strip().splitlines()) == 1
 

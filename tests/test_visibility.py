@@ -53,9 +53,22 @@ def test_graded_levels_are_the_papers_eleven():
 
 @pytest.mark.parametrize(
     ("v", "key"),
-    [(10, "suspended"), (49.9, "suspended"), (50, "near_suspension"), (199, "near_suspension"),
-     (300, "strict"), (499, "strict"), (500, "restricted"), (800, "restricted"), (895, "restricted"),
-     (1000, "minor"), (1999, "minor"), (2009, "normal"), (3999, "normal"), (4000, "clear")],
+    [
+        (10, "suspended"),
+        (49.9, "suspended"),
+        (50, "near_suspension"),
+        (199, "near_suspension"),
+        (300, "strict"),
+        (499, "strict"),
+        (500, "restricted"),
+        (800, "restricted"),
+        (895, "restricted"),
+        (1000, "minor"),
+        (1999, "minor"),
+        (2009, "normal"),
+        (3999, "normal"),
+        (4000, "clear"),
+    ],
 )
 def test_regulation_classes_follow_table_1(v, key):
     assert regulation_class(v).key == key
@@ -88,8 +101,24 @@ def test_vis_log_spacing_is_geometric():
     assert len(levels) == 6 and np.allclose(ratios, ratios[0], rtol=0.02)
 
 
-@pytest.mark.parametrize("text", ["", "abc", "300..abc", "4000..300", "0..100", "-5", "0", "300,,400",
-                                  "300..4000:0", "10..20:50", "5000..9000", "1..2..3", "300;400"])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "",
+        "abc",
+        "300..abc",
+        "4000..300",
+        "0..100",
+        "-5",
+        "0",
+        "300,,400",
+        "300..4000:0",
+        "10..20:50",
+        "5000..9000",
+        "1..2..3",
+        "300;400",
+    ],
+)
 def test_vis_selection_bad(text):
     with pytest.raises(VisSelectionError) as info:
         parse_vis_selection(text)

@@ -78,19 +78,34 @@ def cmd_render(args: argparse.Namespace) -> int:
     scenes = []
     for spec, name in _load_scenes(paths):
         try:
-            spec = with_overrides(spec, spp=args.spp, resolution=resolution, seed=args.seed, mode=args.mode, variant=args.variant, levels=levels)
+            spec = with_overrides(
+                spec,
+                spp=args.spp,
+                resolution=resolution,
+                seed=args.seed,
+                mode=args.mode,
+                variant=args.variant,
+                levels=levels,
+            )
         except OverrideError as err:
             raise UsageError(f"{name}: {err}") from None
         scenes.append((spec, name))
     out = Path(args.out)
-    say = (lambda _msg: None) if args.quiet else (lambda msg: print(f"[seahaze] {msg}", file=sys.stderr, flush=True))
+    say = (
+        (lambda _msg: None)
+        if args.quiet
+        else (lambda msg: print(f"[seahaze] {msg}", file=sys.stderr, flush=True))
+    )
     start = time.perf_counter()
     try:
         results = render_dataset(scenes, out, say)
     except (DatasetError, VariantError) as err:
         raise UsageError(str(err)) from None
     images = sum(1 + len(spec.haze.levels) for spec, _ in scenes)
-    print(f"wrote {len(results)} scene(s), {images} images to {out.resolve()} in {time.perf_counter() - start:.1f} s")
+    print(
+        f"wrote {len(results)} scene(s), {images} images to {out.resolve()} in "
+        f"{time.perf_counter() - start:.1f} s"
+    )
     return 0
 
 
@@ -100,7 +115,10 @@ def cmd_levels(args: argparse.Namespace) -> int:
     print(f"{'level':<7} {'V (m)':>8} {'sigma (1/m)':>12}  regulation class")
     for v in levels:
         cls = regulation_class(v)
-        print(f"{level_name(v):<7} {v:>8g} {extinction_coefficient(v, args.threshold):>12.6f}  {cls.key:<16} {cls.label}")
+        print(
+            f"{level_name(v):<7} {v:>8g} {extinction_coefficient(v, args.threshold):>12.6f}  "
+            f"{cls.key:<16} {cls.label}"
+        )
     return 0
 
 
@@ -131,7 +149,9 @@ def cmd_preview(args: argparse.Namespace) -> int:
     if args.columns < 1 or args.tile_width < 32:
         raise UsageError("--columns must be >= 1 and --tile-width >= 32")
     try:
-        sheet = contact_sheet(root, args.scene, levels, args.columns, args.tile_width, not args.no_boxes)
+        sheet = contact_sheet(
+            root, args.scene, levels, args.columns, args.tile_width, not args.no_boxes
+        )
     except PreviewError as err:
         raise UsageError(str(err)) from None
     out = Path(args.out) if args.out else root / "preview.png"
@@ -143,37 +163,89 @@ def cmd_preview(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``seahaze`` command."""
-    parser = argparse.ArgumentParser(prog="seahaze", description="Physically based maritime haze datasets with exact visibility labels.")
+    parser = argparse.ArgumentParser(
+        prog="seahaze",
+        description="Physically based maritime haze datasets with exact visibility labels.",
+    )
     parser.add_argument("--version", action="version", version=f"seahaze {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    render = sub.add_parser("render", help="render scenes into a dataset folder", description="Render scene YAML files: clean image, hazy levels, distance, labels.")
-    render.add_argument("scenes", nargs="*", metavar="SCENE.yaml", help=f"scene files (default: {DEFAULT_SCENE})")
-    render.add_argument("--vis", metavar="SEL", help="levels: A..B (graded levels in [A,B]), A..B:N (N log-spaced), or 300,1000,2500; default the scene's haze.levels")
-    render.add_argument("--out", default=str(DEFAULT_OUT), metavar="DIR", help=f"dataset folder (default: {DEFAULT_OUT})")
-    render.add_argument("--spp", type=int, metavar="N", help="samples per pixel (default: the scene's render.spp)")
-    render.add_argument("--res", metavar="WxH", help="image size in pixels, e.g. 160x90 (default: the scene's camera.resolution)")
-    render.add_argument("--seed", type=int, metavar="S", help="master seed (default: the scene's render.seed)")
-    render.add_argument("--mode", choices=["reference", "asm"], help="hazy-level renderer (default: the scene's render.mode)")
-    render.add_argument("--variant", metavar="NAME", help="Mitsuba variant: auto, llvm_ad_rgb, cuda_ad_rgb, scalar_rgb, ...")
+    render = sub.add_parser(
+        "render",
+        help="render scenes into a dataset folder",
+        description="Render scene YAML files: clean image, hazy levels, distance, labels.",
+    )
+    render.add_argument(
+        "scenes", nargs="*", metavar="SCENE.yaml", help=f"scene files (default: {DEFAULT_SCENE})"
+    )
+    render.add_argument(
+        "--vis",
+        metavar="SEL",
+        help="levels: A..B (graded levels in [A,B]), A..B:N (N log-spaced), or 300,1000,2500; "
+        "default the scene's haze.levels",
+    )
+    render.add_argument(
+        "--out",
+        default=str(DEFAULT_OUT),
+        metavar="DIR",
+        help=f"dataset folder (default: {DEFAULT_OUT})",
+    )
+    render.add_argument(
+        "--spp", type=int, metavar="N", help="samples per pixel (default: the scene's render.spp)"
+    )
+    render.add_argument(
+        "--res",
+        metavar="WxH",
+        help="image size in pixels, e.g. 160x90 (default: the scene's camera.resolution)",
+    )
+    render.add_argument(
+        "--seed", type=int, metavar="S", help="master seed (default: the scene's render.seed)"
+    )
+    render.add_argument(
+        "--mode",
+        choices=["reference", "asm"],
+        help="hazy-level renderer (default: the scene's render.mode)",
+    )
+    render.add_argument(
+        "--variant",
+        metavar="NAME",
+        help="Mitsuba variant: auto, llvm_ad_rgb, cuda_ad_rgb, scalar_rgb, ...",
+    )
     render.add_argument("--quiet", action="store_true", help="print only the final summary")
     render.set_defaults(func=cmd_render)
 
-    levels = sub.add_parser("levels", help="print visibility levels with sigma and regulation class")
-    levels.add_argument("--vis", metavar="SEL", help="levels as for 'render --vis' (default: the 11 graded levels)")
-    levels.add_argument("--threshold", choices=[t.value for t in Threshold], default=Threshold.KOSCHMIEDER.value, help="contrast threshold convention (default: koschmieder, 2 %%)")
+    levels = sub.add_parser(
+        "levels", help="print visibility levels with sigma and regulation class"
+    )
+    levels.add_argument(
+        "--vis", metavar="SEL", help="levels as for 'render --vis' (default: the 11 graded levels)"
+    )
+    levels.add_argument(
+        "--threshold",
+        choices=[t.value for t in Threshold],
+        default=Threshold.KOSCHMIEDER.value,
+        help="contrast threshold convention (default: koschmieder, 2 %%)",
+    )
     levels.set_defaults(func=cmd_levels)
 
     validate = sub.add_parser("validate", help="check scene files and report every problem")
     validate.add_argument("scenes", nargs="+", metavar="SCENE.yaml")
     validate.set_defaults(func=cmd_validate)
 
-    preview = sub.add_parser("preview", help="contact sheet of a scene: clean and levels side by side, boxes drawn")
-    preview.add_argument("dataset", metavar="DIR", help="dataset folder written by 'seahaze render'")
+    preview = sub.add_parser(
+        "preview", help="contact sheet of a scene: clean and levels side by side, boxes drawn"
+    )
+    preview.add_argument(
+        "dataset", metavar="DIR", help="dataset folder written by 'seahaze render'"
+    )
     preview.add_argument("--scene", help="scene name (default: the first in dataset.json)")
-    preview.add_argument("--levels", metavar="L1,L2", help="levels to show, e.g. clean,v0300,v1000 (default: all)")
+    preview.add_argument(
+        "--levels", metavar="L1,L2", help="levels to show, e.g. clean,v0300,v1000 (default: all)"
+    )
     preview.add_argument("--columns", type=int, default=3, help="tiles per row (default 3)")
-    preview.add_argument("--tile-width", type=int, default=640, help="width of one tile in pixels (default 640)")
+    preview.add_argument(
+        "--tile-width", type=int, default=640, help="width of one tile in pixels (default 640)"
+    )
     preview.add_argument("--no-boxes", action="store_true", help="do not draw the label boxes")
     preview.add_argument("--out", metavar="PNG", help="output file (default: DIR/preview.png)")
     preview.set_defaults(func=cmd_preview)

@@ -77,30 +77,44 @@ def level_entries(visibilities_m: list[float], threshold: Threshold | str) -> li
     entries = []
     for v in visibilities_m:
         cls = regulation_class(v)
-        entries.append({
-            "name": level_name(v),
-            "visibility_m": v,
-            "sigma_per_m": extinction_coefficient(v, threshold),
-            "regulation": cls.key,
-            "regulation_label": cls.label,
-        })
+        entries.append(
+            {
+                "name": level_name(v),
+                "visibility_m": v,
+                "sigma_per_m": extinction_coefficient(v, threshold),
+                "regulation": cls.key,
+                "regulation_label": cls.label,
+            }
+        )
     return entries
 
 
 def data_yaml_text(root: Path, level_names: list[str], class_names: tuple[str, ...]) -> str:
-    """Ultralytics dataset YAML: absolute root, ``train``/``val`` on the clean images, one split per level.
+    """Ultralytics dataset YAML: absolute root, ``train``/``val`` = clean, one split per level.
 
     Ultralytics resolves a relative ``path`` against its own datasets folder, so the root is
     written absolute; validate a level with ``yolo val data=OUT/data.yaml split=v1000``.
     """
-    data: dict[str, Any] = {"path": str(root.resolve()), "train": f"images/{CLEAN}", "val": f"images/{CLEAN}"}
+    data: dict[str, Any] = {
+        "path": str(root.resolve()),
+        "train": f"images/{CLEAN}",
+        "val": f"images/{CLEAN}",
+    }
     for name in level_names:
         data[name] = f"images/{name}"
     data["names"] = dict(enumerate(class_names))
-    return "# seahaze dataset: one split per visibility level (see dataset.json)\n" + yaml.safe_dump(data, sort_keys=False)
+    return (
+        "# seahaze dataset: one split per visibility level (see dataset.json)\n"
+        + yaml.safe_dump(data, sort_keys=False)
+    )
 
 
-def manifest(config: dict[str, Any], levels: list[dict[str, Any]], class_names: tuple[str, ...], scenes: dict[str, Any]) -> dict[str, Any]:
+def manifest(
+    config: dict[str, Any],
+    levels: list[dict[str, Any]],
+    class_names: tuple[str, ...],
+    scenes: dict[str, Any],
+) -> dict[str, Any]:
     """The ``dataset.json`` manifest."""
     return {
         "format": "seahaze-dataset",

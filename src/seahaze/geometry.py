@@ -83,23 +83,39 @@ def build_sea(spec: SceneSpec, camera: Camera) -> tuple[MeshData, float, ocean.O
     """The sea mesh to the horizon, its microfacet roughness and the surface for height queries."""
     params = ocean_params(spec)
     surface = ocean.make_surface(params)
-    vertices, faces = ocean.build_sea_mesh(surface, camera_height_m=camera.height_m, quality=spec.sea.quality)[:2]
+    vertices, faces = ocean.build_sea_mesh(
+        surface, camera_height_m=camera.height_m, quality=spec.sea.quality
+    )[:2]
     # Full Cox–Munk roughness: most of the frame is the far sea, where the mesh is faded flat and
     # every wave is sub-grid; near the camera this counts the resolved waves twice (slightly rough).
-    roughness = spec.sea.roughness if spec.sea.roughness is not None else ocean.cox_munk_alpha(params.wind_speed)
+    roughness = (
+        spec.sea.roughness
+        if spec.sea.roughness is not None
+        else ocean.cox_munk_alpha(params.wind_speed)
+    )
     return MeshData("sea", vertices, faces, spec.sea.water_color, roughness), roughness, surface
 
 
 def layout_vessels(spec: SceneSpec, camera: Camera) -> list[vessels.Placement]:
     """Where the vessels go: explicit ones first, then sampled ones (never overlapping)."""
     rng = np.random.default_rng(derived_seed(spec.render.seed, LAYOUT_SEED_STREAM))
-    placements = vessels.place_explicit(spec.vessels.placed, camera.heading_deg, rng) if spec.vessels.placed else []
+    placements = (
+        vessels.place_explicit(spec.vessels.placed, camera.heading_deg, rng)
+        if spec.vessels.placed
+        else []
+    )
     sampler = spec.vessels.sample
     if sampler is not None and sampler.count > 0:
-        rng = np.random.default_rng(derived_seed(spec.render.seed, LAYOUT_SEED_STREAM, sampler.seed))
+        rng = np.random.default_rng(
+            derived_seed(spec.render.seed, LAYOUT_SEED_STREAM, sampler.seed)
+        )
         weights = sampler.classes or dict.fromkeys(vessels.CLASS_NAMES, 1.0)
         # The spec gives a half-width; the layout takes the full width of the bearing range.
-        spread = 2.0 * sampler.bearing_spread_deg if sampler.bearing_spread_deg is not None else camera.fov_deg
+        spread = (
+            2.0 * sampler.bearing_spread_deg
+            if sampler.bearing_spread_deg is not None
+            else camera.fov_deg
+        )
         placements += vessels.sample_layout(
             count=sampler.count,
             class_weights=weights,
@@ -115,7 +131,9 @@ def layout_vessels(spec: SceneSpec, camera: Camera) -> list[vessels.Placement]:
     return placements
 
 
-def build_vessels(spec: SceneSpec, camera: Camera, surface: ocean.OceanSurface) -> list[VesselInstance]:
+def build_vessels(
+    spec: SceneSpec, camera: Camera, surface: ocean.OceanSurface
+) -> list[VesselInstance]:
     """Vessel meshes placed on the sea; each vessel's waterline follows the surface height."""
     rng = np.random.default_rng(derived_seed(spec.render.seed, VESSEL_SEED_STREAM))
     instances = []
@@ -124,13 +142,28 @@ def build_vessels(spec: SceneSpec, camera: Camera, surface: ocean.OceanSurface) 
         parts = vessels.place_on_sea(model, placement, surface.height)
         waterline = float(surface.height(np.array([placement.x]), np.array([placement.y]))[0])
         meshes = [
-            MeshData(f"vessel{index:03d}_{name}", np.asarray(v, np.float32), np.asarray(f, np.uint32), tuple(mat.rgb), mat.roughness)
+            MeshData(
+                f"vessel{index:03d}_{name}",
+                np.asarray(v, np.float32),
+                np.asarray(f, np.uint32),
+                tuple(mat.rgb),
+                mat.roughness,
+            )
             for name, v, f, mat in parts
         ]
-        instances.append(VesselInstance(
-            index, placement.kind, vessels.CLASS_NAMES.index(placement.kind), placement,
-            model.length_m, model.beam_m, model.air_draft_m, waterline, meshes,
-        ))
+        instances.append(
+            VesselInstance(
+                index,
+                placement.kind,
+                vessels.CLASS_NAMES.index(placement.kind),
+                placement,
+                model.length_m,
+                model.beam_m,
+                model.air_draft_m,
+                waterline,
+                meshes,
+            )
+        )
     return instances
 
 

@@ -69,7 +69,9 @@ def write_exr(path: str | Path, channels: dict[str, np.ndarray]) -> None:
     path = Path(path)
     tmp = _atomic_target(path)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    data = {name: np.ascontiguousarray(values, dtype=np.float32) for name, values in channels.items()}
+    data = {
+        name: np.ascontiguousarray(values, dtype=np.float32) for name, values in channels.items()
+    }
     with OpenEXR.File(header, data) as exr:
         exr.write(str(tmp))
     os.replace(tmp, path)
@@ -81,7 +83,8 @@ def write_rgb_exr(path: str | Path, radiance: np.ndarray) -> None:
 
 
 def read_exr(path: str | Path) -> dict[str, np.ndarray]:
-    """All channels of an EXR file as float arrays (an RGB layer comes back as one (H, W, 3) 'RGB')."""
+    """All channels of an EXR file as float arrays (an RGB layer comes back as one (H, W, 3) "
+    "'RGB')."""
     import OpenEXR
 
     with OpenEXR.File(str(path)) as exr:

@@ -36,14 +36,26 @@ class Box:
         )
 
 
-def boxes_from_instances(instance: np.ndarray, class_ids: list[int], min_pixels: int = 1) -> list[Box]:
+def boxes_from_instances(
+    instance: np.ndarray, class_ids: list[int], min_pixels: int = 1
+) -> list[Box]:
     """Tight boxes of every vessel visible in an (H, W) instance map (-1 = no vessel)."""
     boxes = []
     for vessel, class_id in enumerate(class_ids):
         rows, cols = np.nonzero(instance == vessel)
         if len(rows) < min_pixels:
             continue
-        boxes.append(Box(vessel, class_id, float(cols.min()), float(rows.min()), float(cols.max() + 1), float(rows.max() + 1), len(rows)))
+        boxes.append(
+            Box(
+                vessel,
+                class_id,
+                float(cols.min()),
+                float(rows.min()),
+                float(cols.max() + 1),
+                float(rows.max() + 1),
+                len(rows),
+            )
+        )
     return boxes
 
 

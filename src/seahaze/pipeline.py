@@ -55,30 +55,36 @@ class _Timer:
         self.timings[self.key] = time.perf_counter() - self.start
 
 
-def _vessel_meta(geometry: SceneGeometry, boxes: list[labels.Box], camera: Camera) -> list[dict[str, Any]]:
+def _vessel_meta(
+    geometry: SceneGeometry, boxes: list[labels.Box], camera: Camera
+) -> list[dict[str, Any]]:
     by_vessel = {b.vessel: b for b in boxes}
     out = []
     for v in geometry.vessels:
         p = v.placement
         box = by_vessel.get(v.index)
-        out.append({
-            "index": v.index,
-            "class": v.kind,
-            "class_id": v.class_id,
-            "position_m": [p.x, p.y, v.waterline_z],
-            "heading_deg": p.heading_deg,
-            "length_m": v.length_m,
-            "beam_m": v.beam_m,
-            "air_draft_m": v.air_draft_m,
-            "distance_m": float(np.hypot(p.x, p.y)),
-            "bearing_deg": p.bearing_deg,
-            "box_px": None if box is None else [box.x0, box.y0, box.x1, box.y1],
-            "visible_pixels": 0 if box is None else box.pixels,
-        })
+        out.append(
+            {
+                "index": v.index,
+                "class": v.kind,
+                "class_id": v.class_id,
+                "position_m": [p.x, p.y, v.waterline_z],
+                "heading_deg": p.heading_deg,
+                "length_m": v.length_m,
+                "beam_m": v.beam_m,
+                "air_draft_m": v.air_draft_m,
+                "distance_m": float(np.hypot(p.x, p.y)),
+                "bearing_deg": p.bearing_deg,
+                "box_px": None if box is None else [box.x0, box.y0, box.x1, box.y1],
+                "visible_pixels": 0 if box is None else box.pixels,
+            }
+        )
     return out
 
 
-def render_scene(spec: SceneSpec, name: str, root: Path, progress: Progress = _quiet) -> SceneResult:
+def render_scene(
+    spec: SceneSpec, name: str, root: Path, progress: Progress = _quiet
+) -> SceneResult:
     """Render one scene (clean, distance, every level of ``spec.haze.levels``) into ``root``."""
     layout = Layout(root)
     timings: dict[str, float] = {}
@@ -99,7 +105,11 @@ def render_scene(spec: SceneSpec, name: str, root: Path, progress: Progress = _q
     progress(f"{name}: clean pass {timings['clean']:.1f} s")
 
     elevation = np.degrees(np.arcsin(np.clip(geo.directions[..., 2], -1.0, 1.0)))
-    exposure = imaging.auto_exposure(clean, geo.distance_m, elevation) if spec.render.exposure == "auto" else float(spec.render.exposure)
+    exposure = (
+        imaging.auto_exposure(clean, geo.distance_m, elevation)
+        if spec.render.exposure == "auto"
+        else float(spec.render.exposure)
+    )
     boxes = labels.boxes_from_instances(geo.instance, [v.class_id for v in geometry.vessels])
     label_text = labels.yolo_text(boxes, camera.width, camera.height)
 
@@ -113,10 +123,20 @@ def render_scene(spec: SceneSpec, name: str, root: Path, progress: Progress = _q
         key = level_name(v)
         with _Timer(timings, f"level_{key}"):
             if spec.render.mode == "reference":
-                radiance = passes.render_reference_level(loaded, sigma, haze.albedo, haze.g, spec.render.spp, spec.render.seed, i)
+                radiance = passes.render_reference_level(
+                    loaded, sigma, haze.albedo, haze.g, spec.render.spp, spec.render.seed, i
+                )
                 airlight = None
             else:
-                airlight = passes.render_airlight(loaded, sigma, haze.albedo, haze.g, spec.render.airlight_spp, spec.render.seed, i)
+                airlight = passes.render_airlight(
+                    loaded,
+                    sigma,
+                    haze.albedo,
+                    haze.g,
+                    spec.render.airlight_spp,
+                    spec.render.seed,
+                    i,
+                )
                 radiance = passes.asm_level(clean, geo, sigma, airlight.rgb, haze.top_m)
         _write_image(layout, key, name, radiance, exposure, spec.render.write_exr)
         write_text(layout.label(key, name), label_text)
@@ -135,9 +155,15 @@ def render_scene(spec: SceneSpec, name: str, root: Path, progress: Progress = _q
         "camera": {**spec.camera.model_dump(mode="json"), "position_m": camera.origin.tolist()},
         "sun": spec.sun.model_dump(mode="json"),
         "sky": spec.sky.model_dump(mode="json"),
-        "sea": {**spec.sea.model_dump(mode="json"), "roughness_used": geometry.sea_roughness,
-                "triangles": len(geometry.sea.faces)},
-        "haze": {**haze.model_dump(mode="json", exclude={"levels"}), "box_half_width_m": loaded.box_half_width_m},
+        "sea": {
+            **spec.sea.model_dump(mode="json"),
+            "roughness_used": geometry.sea_roughness,
+            "triangles": len(geometry.sea.faces),
+        },
+        "haze": {
+            **haze.model_dump(mode="json", exclude={"levels"}),
+            "box_half_width_m": loaded.box_half_width_m,
+        },
         "levels": level_meta,
         "vessels": _vessel_meta(geometry, boxes, camera),
     }
@@ -145,7 +171,9 @@ def render_scene(spec: SceneSpec, name: str, root: Path, progress: Progress = _q
     return SceneResult(name, variant, exposure, boxes, timings, meta)
 
 
-def _write_image(layout: Layout, level: str, scene: str, radiance: np.ndarray, exposure: float, exr: bool) -> None:
+def _write_image(
+    layout: Layout, level: str, scene: str, radiance: np.ndarray, exposure: float, exr: bool
+) -> None:
     imaging.write_png(layout.image(level, scene), imaging.to_srgb8(radiance, exposure))
     if exr:
         imaging.write_rgb_exr(layout.exr(level, scene), radiance)
@@ -155,28 +183,47 @@ class DatasetError(ValueError):
     """Scenes that cannot form one dataset (e.g. different levels); the message is for the user."""
 
 
-def render_dataset(scenes: Sequence[tuple[SceneSpec, str]], root: Path, progress: Progress = _quiet) -> list[SceneResult]:
-    """Render several scenes into one dataset folder and write ``data.yaml`` and ``dataset.json``."""
+def render_dataset(
+    scenes: Sequence[tuple[SceneSpec, str]], root: Path, progress: Progress = _quiet
+) -> list[SceneResult]:
+    """Render several scenes into one dataset folder and write ``data.yaml`` and "
+    "``dataset.json``."""
     if not scenes:
         raise DatasetError("no scene to render")
     first = scenes[0][0].haze
     for spec, name in scenes[1:]:
         if list(spec.haze.levels) != list(first.levels) or spec.haze.threshold != first.threshold:
-            raise DatasetError(f"scene '{name}' has other haze levels or threshold than '{scenes[0][1]}'; pass --vis to use the same levels")
+            raise DatasetError(
+                f"scene '{name}' has other haze levels or threshold than '{scenes[0][1]}'; "
+                "pass --vis to use the same levels"
+            )
     names = [n for _, n in scenes]
     duplicates = {n for n in names if names.count(n) > 1}
     if duplicates:
-        raise DatasetError(f"two scenes share the name(s) {sorted(duplicates)}; set 'name:' in the YAML")
+        raise DatasetError(
+            f"two scenes share the name(s) {sorted(duplicates)}; set 'name:' in the YAML"
+        )
     layout = Layout(root)
     root.mkdir(parents=True, exist_ok=True)
     levels = level_entries(list(first.levels), first.threshold)
-    write_text(layout.data_yaml, data_yaml_text(root, [entry["name"] for entry in levels], CLASS_NAMES))
+    write_text(
+        layout.data_yaml, data_yaml_text(root, [entry["name"] for entry in levels], CLASS_NAMES)
+    )
     results = []
     scene_status: dict[str, Any] = {}
     for spec, name in scenes:
         result = render_scene(spec, name, root, progress)
         results.append(result)
-        scene_status[name] = {"status": "done", "seed": spec.render.seed, "config": spec.model_dump(mode="json", by_alias=True)}
-        config = {"threshold": str(first.threshold), "mode": spec.render.mode, "spp": spec.render.spp, "resolution": list(spec.camera.resolution)}
+        scene_status[name] = {
+            "status": "done",
+            "seed": spec.render.seed,
+            "config": spec.model_dump(mode="json", by_alias=True),
+        }
+        config = {
+            "threshold": str(first.threshold),
+            "mode": spec.render.mode,
+            "spp": spec.render.spp,
+            "resolution": list(spec.camera.resolution),
+        }
         write_json(layout.manifest, manifest(config, levels, CLASS_NAMES, scene_status))
     return results

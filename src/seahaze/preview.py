@@ -29,7 +29,9 @@ def dataset_levels(root: Path) -> list[str]:
     return [CLEAN, *(level["name"] for level in data["levels"])]
 
 
-def _read_boxes(path: Path, width: int, height: int) -> list[tuple[int, float, float, float, float]]:
+def _read_boxes(
+    path: Path, width: int, height: int
+) -> list[tuple[int, float, float, float, float]]:
     boxes = []
     for line in path.read_text().splitlines():
         cls, cx, cy, w, h = line.split()[:5]
@@ -38,7 +40,9 @@ def _read_boxes(path: Path, width: int, height: int) -> list[tuple[int, float, f
     return boxes
 
 
-def _tile(layout: Layout, level: str, scene: str, tile_width: int, boxes: bool, names: list[str]) -> Image.Image:
+def _tile(
+    layout: Layout, level: str, scene: str, tile_width: int, boxes: bool, names: list[str]
+) -> Image.Image:
     path = layout.image(level, scene)
     if not path.exists():
         raise PreviewError(f"{path}: not found")
@@ -49,8 +53,16 @@ def _tile(layout: Layout, level: str, scene: str, tile_width: int, boxes: bool, 
     label_path = layout.label(level, scene)
     if boxes and label_path.exists():
         for cls, x0, y0, x1, y1 in _read_boxes(label_path, image.width, image.height):
-            draw.rectangle([x0 * scale, y0 * scale, x1 * scale, y1 * scale], outline=BOX_COLOUR, width=max(1, tile_width // 400))
-            draw.text((x0 * scale, y0 * scale - 11), names[cls] if cls < len(names) else str(cls), fill=BOX_COLOUR)
+            draw.rectangle(
+                [x0 * scale, y0 * scale, x1 * scale, y1 * scale],
+                outline=BOX_COLOUR,
+                width=max(1, tile_width // 400),
+            )
+            draw.text(
+                (x0 * scale, y0 * scale - 11),
+                names[cls] if cls < len(names) else str(cls),
+                fill=BOX_COLOUR,
+            )
     caption = "clean" if level == CLEAN else f"V = {int(level[1:])} m"
     bar = round(tile.height * CAPTION_HEIGHT_FRACTION)
     draw.rectangle([0, 0, tile.width, bar], fill=(0, 0, 0))
@@ -58,8 +70,14 @@ def _tile(layout: Layout, level: str, scene: str, tile_width: int, boxes: bool, 
     return tile
 
 
-def contact_sheet(root: Path, scene: str | None = None, levels: list[str] | None = None, columns: int = 3,
-                  tile_width: int = 640, boxes: bool = True) -> Image.Image:
+def contact_sheet(
+    root: Path,
+    scene: str | None = None,
+    levels: list[str] | None = None,
+    columns: int = 3,
+    tile_width: int = 640,
+    boxes: bool = True,
+) -> Image.Image:
     """A grid of one scene's images (``levels``, default all) with YOLO boxes drawn."""
     layout = Layout(root)
     available = dataset_levels(root)
@@ -74,7 +92,9 @@ def contact_sheet(root: Path, scene: str | None = None, levels: list[str] | None
     scene = scene or scenes[0]
     if scene not in scenes:
         raise PreviewError(f"scene '{scene}' not in {root}; available: {', '.join(scenes)}")
-    tiles = [_tile(layout, level, scene, tile_width, boxes, manifest["classes"]) for level in levels]
+    tiles = [
+        _tile(layout, level, scene, tile_width, boxes, manifest["classes"]) for level in levels
+    ]
     rows = -(-len(tiles) // columns)
     sheet = Image.new("RGB", (columns * tile_width, rows * tiles[0].height), (0, 0, 0))
     for i, tile in enumerate(tiles):

@@ -41,7 +41,9 @@ class SceneFileError(Exception):
         super().__init__("\n".join(str(p) for p in problems))
 
 
-def _index_lines(node: yaml.Node, loc: Loc, lines: dict[Loc, int], dupes: list[tuple[Loc, int]]) -> None:
+def _index_lines(
+    node: yaml.Node, loc: Loc, lines: dict[Loc, int], dupes: list[tuple[Loc, int]]
+) -> None:
     """Record the 1-based line of every mapping key and sequence item, and duplicate keys."""
     lines.setdefault(loc, node.start_mark.line + 1)
     if isinstance(node, yaml.MappingNode):
@@ -105,7 +107,9 @@ def _allowed(loc: Loc) -> str:
         for attr, sym in (("ge", ">="), ("gt", ">"), ("le", "<="), ("lt", "<")):
             value = getattr(meta, attr, None)
             if value is not None:
-                bounds.append(f"{sym} {value:g}" if isinstance(value, float | int) else f"{sym} {value}")
+                bounds.append(
+                    f"{sym} {value:g}" if isinstance(value, float | int) else f"{sym} {value}"
+                )
     extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
     unit = extra.get("unit")
     parts = []
@@ -125,39 +129,57 @@ def _dotted(loc: Loc) -> str:
 
 def _allowed_keys(loc: Loc) -> str:
     """For an unknown key: the keys its section does allow."""
-    parent = _model_in(_field_info(loc[:-1]).annotation) if len(loc) > 1 and _field_info(loc[:-1]) else SceneSpec
+    parent = (
+        _model_in(_field_info(loc[:-1]).annotation)
+        if len(loc) > 1 and _field_info(loc[:-1])
+        else SceneSpec
+    )
     if parent is None:
         return ""
     keys = [f.alias or n for n, f in parent.model_fields.items()]
     return f"; allowed keys: {', '.join(keys)}"
 
 
-def _problems_from_validation(err: ValidationError, file: str, lines: dict[Loc, int]) -> list[Problem]:
+def _problems_from_validation(
+    err: ValidationError, file: str, lines: dict[Loc, int]
+) -> list[Problem]:
     problems = []
     for item in err.errors():
-        loc = tuple(p for p in item["loc"] if not (isinstance(p, str) and p.startswith("function-")))
+        loc = tuple(
+            p for p in item["loc"] if not (isinstance(p, str) and p.startswith("function-"))
+        )
         # pydantic puts the union member name in loc for `float | Literal[...]`; drop such parts.
-        loc = tuple(p for p in loc if not (isinstance(p, str) and ("[" in p or p in ("float", "int", "str"))))
+        loc = tuple(
+            p
+            for p in loc
+            if not (isinstance(p, str) and ("[" in p or p in ("float", "int", "str")))
+        )
         if item["type"] == "extra_forbidden":
             message = f"unknown key '{loc[-1]}'{_allowed_keys(loc)}"
         elif item["type"] == "missing" and loc and isinstance(loc[-1], int):
-            message = f"missing list item {loc[-1] + 1} ({_dotted(loc[:-1])}: {_field_info(loc[:-1]).description})"
+            parent = _field_info(loc[:-1])
+            message = f"missing list item {loc[-1] + 1} ({_dotted(loc[:-1])}: {parent.description})"
         else:
             message = item["msg"].replace("Value error, ", "") + _allowed(loc)
         problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), message))
     # Several union branches can report the same place; keep one message per place and text.
-    unique = list(dict.fromkeys(problems))
-    return unique
+    return list(dict.fromkeys(problems))
 
 
 def _reject_non_finite(data: Any, loc: Loc, lines: dict[Loc, int], file: str) -> list[Problem]:
     """YAML accepts .nan and .inf as floats; no scene field means them."""
     if isinstance(data, float) and not math.isfinite(data):
-        return [Problem(file, _line_for(loc, lines), _dotted(loc), f"{data} is not a finite number")]
+        return [
+            Problem(file, _line_for(loc, lines), _dotted(loc), f"{data} is not a finite number")
+        ]
     if isinstance(data, dict):
-        return [p for k, v in data.items() for p in _reject_non_finite(v, (*loc, str(k)), lines, file)]
+        return [
+            p for k, v in data.items() for p in _reject_non_finite(v, (*loc, str(k)), lines, file)
+        ]
     if isinstance(data, list):
-        return [p for i, v in enumerate(data) for p in _reject_non_finite(v, (*loc, i), lines, file)]
+        return [
+            p for i, v in enumerate(data) for p in _reject_non_finite(v, (*loc, i), lines, file)
+        ]
     return []
 
 
@@ -174,12 +196,17 @@ def parse_scene_text(text: str, file: str = "<scene>") -> SceneSpec:
     if data is None:
         data = {}
     if not isinstance(data, dict):
-        raise SceneFileError([Problem(file, 1, "", f"a scene is a mapping of sections, got {type(data).__name__}")])
+        raise SceneFileError(
+            [Problem(file, 1, "", f"a scene is a mapping of sections, got {type(data).__name__}")]
+        )
     lines: dict[Loc, int] = {}
     dupes: list[tuple[Loc, int]] = []
     if node is not None:
         _index_lines(node, (), lines, dupes)
-    problems = [Problem(file, line, _dotted(loc), "duplicate key (the later value would silently win)") for loc, line in dupes]
+    problems = [
+        Problem(file, line, _dotted(loc), "duplicate key (the later value would silently win)")
+        for loc, line in dupes
+    ]
     problems += _reject_non_finite(data, (), lines, file)
     try:
         spec = SceneSpec.model_validate(data)
@@ -203,17 +230,39 @@ def _check_vessel_classes(spec: SceneSpec, file: str, lines: dict[Loc, int]) -> 
     for i, vessel in enumerate(spec.vessels.placed):
         loc: Loc = ("vessels", "placed", i, "class")
         if vessel.kind not in CLASS_NAMES:
-            problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), f"unknown vessel class '{vessel.kind}'; allowed: {allowed}"))
+            problems.append(
+                Problem(
+                    file,
+                    _line_for(loc, lines),
+                    _dotted(loc),
+                    f"unknown vessel class '{vessel.kind}'; allowed: {allowed}",
+                )
+            )
             continue
         lo, hi = VESSEL_CLASSES[vessel.kind].length_range_m
         if vessel.length_m is not None and not lo <= vessel.length_m <= hi:
             loc = ("vessels", "placed", i, "length_m")
-            problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), f"{vessel.length_m:g} m is outside the {vessel.kind} range (allowed: {lo:g} to {hi:g} m)"))
+            problems.append(
+                Problem(
+                    file,
+                    _line_for(loc, lines),
+                    _dotted(loc),
+                    f"{vessel.length_m:g} m is outside the {vessel.kind} range (allowed: "
+                    f"{lo:g} to {hi:g} m)",
+                )
+            )
     sampler = spec.vessels.sample
     for kind in (sampler.classes or {}) if sampler else {}:
         if kind not in CLASS_NAMES:
             loc = ("vessels", "sample", "classes", kind)
-            problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), f"unknown vessel class '{kind}'; allowed: {allowed}"))
+            problems.append(
+                Problem(
+                    file,
+                    _line_for(loc, lines),
+                    _dotted(loc),
+                    f"unknown vessel class '{kind}'; allowed: {allowed}",
+                )
+            )
     return problems
 
 

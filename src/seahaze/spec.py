@@ -28,84 +28,273 @@ class _Spec(BaseModel):
 class CameraSpec(_Spec):
     """A pinhole camera above the sea at the world origin."""
 
-    height_m: float = Field(12.0, ge=0.5, le=1000.0, description="Height of the camera above mean sea level.", json_schema_extra=_unit("m"))
-    fov_deg: float = Field(60.0, gt=1.0, le=120.0, description="Horizontal field of view.", json_schema_extra=_unit("deg"))
-    pitch_deg: float = Field(-1.5, ge=-60.0, le=30.0, description="Elevation of the optical axis; negative looks down at the sea.", json_schema_extra=_unit("deg"))
-    heading_deg: float = Field(0.0, ge=-360.0, le=360.0, description="Azimuth of the optical axis, counter-clockwise from +x.", json_schema_extra=_unit("deg"))
-    resolution: tuple[Annotated[int, Field(ge=8, le=8192)], Annotated[int, Field(ge=8, le=8192)]] = Field(
-        (1280, 720), description="Image width and height in pixels (`--res WxH` overrides).", json_schema_extra=_unit("px"))
+    height_m: float = Field(
+        12.0,
+        ge=0.5,
+        le=1000.0,
+        description="Height of the camera above mean sea level.",
+        json_schema_extra=_unit("m"),
+    )
+    fov_deg: float = Field(
+        60.0,
+        gt=1.0,
+        le=120.0,
+        description="Horizontal field of view.",
+        json_schema_extra=_unit("deg"),
+    )
+    pitch_deg: float = Field(
+        -1.5,
+        ge=-60.0,
+        le=30.0,
+        description="Elevation of the optical axis; negative looks down at the sea.",
+        json_schema_extra=_unit("deg"),
+    )
+    heading_deg: float = Field(
+        0.0,
+        ge=-360.0,
+        le=360.0,
+        description="Azimuth of the optical axis, counter-clockwise from +x.",
+        json_schema_extra=_unit("deg"),
+    )
+    resolution: tuple[
+        Annotated[int, Field(ge=8, le=8192)], Annotated[int, Field(ge=8, le=8192)]
+    ] = Field(
+        (1280, 720),
+        description="Image width and height in pixels (`--res WxH` overrides).",
+        json_schema_extra=_unit("px"),
+    )
 
 
 class SunSpec(_Spec):
     """The sun of the Hosek–Wilkie sun-and-sky model."""
 
-    elevation_deg: float = Field(25.0, ge=0.5, le=89.5, description="Sun elevation above the horizon.", json_schema_extra=_unit("deg"))
-    azimuth_deg: float = Field(140.0, ge=-360.0, le=360.0, description="Sun azimuth, counter-clockwise from +x (0 = in front of a camera with heading 0).", json_schema_extra=_unit("deg"))
-    scale: float = Field(1.0, ge=0.0, le=100.0, description="Multiplier on the sun's radiance (1 = physical).", json_schema_extra=_unit("1"))
+    elevation_deg: float = Field(
+        25.0,
+        ge=0.5,
+        le=89.5,
+        description="Sun elevation above the horizon.",
+        json_schema_extra=_unit("deg"),
+    )
+    azimuth_deg: float = Field(
+        140.0,
+        ge=-360.0,
+        le=360.0,
+        description="Sun azimuth, counter-clockwise from +x (0 = in front of a camera with "
+        "heading 0).",
+        json_schema_extra=_unit("deg"),
+    )
+    scale: float = Field(
+        1.0,
+        ge=0.0,
+        le=100.0,
+        description="Multiplier on the sun's radiance (1 = physical).",
+        json_schema_extra=_unit("1"),
+    )
 
 
 class SkySpec(_Spec):
     """The clear-sky dome above the haze layer (Hosek & Wilkie 2012, Mitsuba `sunsky`)."""
 
-    turbidity: float = Field(3.0, ge=1.0, le=10.0, description="Linke turbidity of the atmosphere above the haze (2 arctic, 3 clear, 6 humid, 10 hazy).", json_schema_extra=_unit("1"))
-    ground_albedo: float = Field(0.06, ge=0.0, le=1.0, description="Ground (sea) albedo used by the sky model's lower hemisphere.", json_schema_extra=_unit("1"))
-    scale: float = Field(1.0, ge=0.0, le=100.0, description="Multiplier on the sky's radiance (1 = physical).", json_schema_extra=_unit("1"))
+    turbidity: float = Field(
+        3.0,
+        ge=1.0,
+        le=10.0,
+        description="Linke turbidity of the atmosphere above the haze (2 arctic, 3 clear, 6 "
+        "humid, 10 hazy).",
+        json_schema_extra=_unit("1"),
+    )
+    ground_albedo: float = Field(
+        0.06,
+        ge=0.0,
+        le=1.0,
+        description="Ground (sea) albedo used by the sky model's lower hemisphere.",
+        json_schema_extra=_unit("1"),
+    )
+    scale: float = Field(
+        1.0,
+        ge=0.0,
+        le=100.0,
+        description="Multiplier on the sky's radiance (1 = physical).",
+        json_schema_extra=_unit("1"),
+    )
 
 
 class SeaSpec(_Spec):
     """The sea surface: geometry from a sea state, optics of a Fresnel interface over dark water."""
 
-    model: Literal["flat", "gerstner", "fft"] = Field("fft", description="Surface generator: `flat` plane, `gerstner` wave sum or Tessendorf `fft` height field.")
-    spectrum: Literal["jonswap", "pierson_moskowitz", "phillips"] = Field("jonswap", description="Wave spectrum the generator samples.")
-    wind_speed: float = Field(6.0, ge=0.0, le=40.0, description="Wind speed 10 m above the sea; sets the spectrum and the Cox–Munk roughness.", json_schema_extra=_unit("m/s"))
-    beaufort: int | None = Field(None, ge=0, le=12, description="Beaufort force; when given it sets `wind_speed` from the WMO table.", json_schema_extra=_unit("Bft"))
-    fetch_km: float = Field(100.0, gt=0.0, le=5000.0, description="Fetch for the JONSWAP spectrum.", json_schema_extra=_unit("km"))
-    direction_deg: float = Field(30.0, ge=-360.0, le=360.0, description="Direction the waves travel toward, counter-clockwise from +x.", json_schema_extra=_unit("deg"))
-    choppiness: float = Field(0.8, ge=0.0, le=2.0, description="Horizontal (choppy) displacement factor of the FFT and Gerstner surfaces.", json_schema_extra=_unit("1"))
-    time_s: float = Field(0.0, ge=0.0, description="Time of the wave field; sequences advance it consistently.", json_schema_extra=_unit("s"))
-    seed: int | None = Field(None, ge=0, description="Seed of the wave phases; default derived from `render.seed`.")
-    quality: Literal["low", "medium", "high"] = Field("medium", description="Mesh density to the horizon (about 0.1M, 0.5M, 2M triangles).")
-    ior: float = Field(1.333, ge=1.0, le=2.0, description="Refractive index of sea water.", json_schema_extra=_unit("1"))
-    water_color: tuple[Annotated[float, Field(ge=0.0, le=1.0)], Annotated[float, Field(ge=0.0, le=1.0)], Annotated[float, Field(ge=0.0, le=1.0)]] = Field(
-        (0.004, 0.016, 0.020), description="Diffuse reflectance of the water body below the interface (linear RGB).", json_schema_extra=_unit("1"))
-    roughness: float | None = Field(None, ge=0.001, le=1.0, description="Microfacet roughness (alpha); default from the wind by Cox–Munk.", json_schema_extra=_unit("1"))
+    model: Literal["flat", "gerstner", "fft"] = Field(
+        "fft",
+        description="Surface generator: `flat` plane, `gerstner` wave sum or Tessendorf `fft` "
+        "height field.",
+    )
+    spectrum: Literal["jonswap", "pierson_moskowitz", "phillips"] = Field(
+        "jonswap", description="Wave spectrum the generator samples."
+    )
+    wind_speed: float = Field(
+        6.0,
+        ge=0.0,
+        le=40.0,
+        description="Wind speed 10 m above the sea; sets the spectrum and the Cox–Munk roughness.",
+        json_schema_extra=_unit("m/s"),
+    )
+    beaufort: int | None = Field(
+        None,
+        ge=0,
+        le=12,
+        description="Beaufort force; when given it sets `wind_speed` from the WMO table.",
+        json_schema_extra=_unit("Bft"),
+    )
+    fetch_km: float = Field(
+        100.0,
+        gt=0.0,
+        le=5000.0,
+        description="Fetch for the JONSWAP spectrum.",
+        json_schema_extra=_unit("km"),
+    )
+    direction_deg: float = Field(
+        30.0,
+        ge=-360.0,
+        le=360.0,
+        description="Direction the waves travel toward, counter-clockwise from +x.",
+        json_schema_extra=_unit("deg"),
+    )
+    choppiness: float = Field(
+        0.8,
+        ge=0.0,
+        le=2.0,
+        description="Horizontal (choppy) displacement factor of the FFT and Gerstner surfaces.",
+        json_schema_extra=_unit("1"),
+    )
+    time_s: float = Field(
+        0.0,
+        ge=0.0,
+        description="Time of the wave field; sequences advance it consistently.",
+        json_schema_extra=_unit("s"),
+    )
+    seed: int | None = Field(
+        None, ge=0, description="Seed of the wave phases; default derived from `render.seed`."
+    )
+    quality: Literal["low", "medium", "high"] = Field(
+        "medium", description="Mesh density to the horizon (about 0.1M, 0.5M, 2M triangles)."
+    )
+    ior: float = Field(
+        1.333,
+        ge=1.0,
+        le=2.0,
+        description="Refractive index of sea water.",
+        json_schema_extra=_unit("1"),
+    )
+    water_color: tuple[
+        Annotated[float, Field(ge=0.0, le=1.0)],
+        Annotated[float, Field(ge=0.0, le=1.0)],
+        Annotated[float, Field(ge=0.0, le=1.0)],
+    ] = Field(
+        (0.004, 0.016, 0.020),
+        description="Diffuse reflectance of the water body below the interface (linear RGB).",
+        json_schema_extra=_unit("1"),
+    )
+    roughness: float | None = Field(
+        None,
+        ge=0.001,
+        le=1.0,
+        description="Microfacet roughness (alpha); default from the wind by Cox–Munk.",
+        json_schema_extra=_unit("1"),
+    )
 
 
 class PlacedVessel(_Spec):
     """One vessel at an explicit place relative to the camera."""
 
-    kind: str = Field(alias="class", description="Vessel class, one of the library's classes (see `seahaze classes`).")
-    distance_m: float = Field(gt=10.0, le=50000.0, description="Horizontal distance from the camera to midships.", json_schema_extra=_unit("m"))
-    bearing_deg: float = Field(0.0, ge=-180.0, le=180.0, description="Bearing from the camera's heading, positive to the left.", json_schema_extra=_unit("deg"))
-    heading_deg: float = Field(90.0, ge=-360.0, le=360.0, description="Direction the bow points, counter-clockwise from +x.", json_schema_extra=_unit("deg"))
-    length_m: float | None = Field(None, gt=1.0, le=500.0, description="Length overall; default sampled in the class's range.", json_schema_extra=_unit("m"))
+    kind: str = Field(
+        alias="class",
+        description="Vessel class, one of the library's classes (see `seahaze classes`).",
+    )
+    distance_m: float = Field(
+        gt=10.0,
+        le=50000.0,
+        description="Horizontal distance from the camera to midships.",
+        json_schema_extra=_unit("m"),
+    )
+    bearing_deg: float = Field(
+        0.0,
+        ge=-180.0,
+        le=180.0,
+        description="Bearing from the camera's heading, positive to the left.",
+        json_schema_extra=_unit("deg"),
+    )
+    heading_deg: float = Field(
+        90.0,
+        ge=-360.0,
+        le=360.0,
+        description="Direction the bow points, counter-clockwise from +x.",
+        json_schema_extra=_unit("deg"),
+    )
+    length_m: float | None = Field(
+        None,
+        gt=1.0,
+        le=500.0,
+        description="Length overall; default sampled in the class's range.",
+        json_schema_extra=_unit("m"),
+    )
 
 
 class VesselSampler(_Spec):
     """Vessels drawn at random along the view depth."""
 
     count: int = Field(5, ge=0, le=100, description="Number of vessels.")
-    classes: dict[str, Annotated[float, Field(gt=0.0)]] | None = Field(None, description="Class mix as relative weights; default all classes equally.")
-    distance_m: tuple[Annotated[float, Field(gt=10.0)], Annotated[float, Field(le=50000.0)]] = Field(
-        (150.0, 4000.0), description="Range of horizontal distances from the camera.", json_schema_extra=_unit("m"))
-    distribution: Literal["log", "uniform"] = Field("log", description="Near-to-far distance law: `log` spreads vessels evenly in log-distance (as many near as far in each octave).")
-    bearing_spread_deg: float | None = Field(None, ge=0.0, le=180.0, description="Half-width of the bearing range; default keeps vessels inside the field of view.", json_schema_extra=_unit("deg"))
-    min_separation_m: float = Field(40.0, ge=0.0, le=5000.0, description="Minimum clearance between hull footprints.", json_schema_extra=_unit("m"))
-    seed: int | None = Field(None, ge=0, description="Seed of the layout; default derived from `render.seed`.")
+    classes: dict[str, Annotated[float, Field(gt=0.0)]] | None = Field(
+        None, description="Class mix as relative weights; default all classes equally."
+    )
+    distance_m: tuple[Annotated[float, Field(gt=10.0)], Annotated[float, Field(le=50000.0)]] = (
+        Field(
+            (150.0, 4000.0),
+            description="Range of horizontal distances from the camera.",
+            json_schema_extra=_unit("m"),
+        )
+    )
+    distribution: Literal["log", "uniform"] = Field(
+        "log",
+        description="Near-to-far distance law: `log` spreads vessels evenly in log-distance "
+        "(as many near as far in each octave).",
+    )
+    bearing_spread_deg: float | None = Field(
+        None,
+        ge=0.0,
+        le=180.0,
+        description="Half-width of the bearing range; default keeps vessels inside the field "
+        "of view.",
+        json_schema_extra=_unit("deg"),
+    )
+    min_separation_m: float = Field(
+        40.0,
+        ge=0.0,
+        le=5000.0,
+        description="Minimum clearance between hull footprints.",
+        json_schema_extra=_unit("m"),
+    )
+    seed: int | None = Field(
+        None, ge=0, description="Seed of the layout; default derived from `render.seed`."
+    )
 
     @model_validator(mode="after")
     def _ordered_range(self) -> VesselSampler:
         lo, hi = self.distance_m
         if lo >= hi:
-            raise ValueError(f"distance_m must be [near, far] with near < far, got [{lo:g}, {hi:g}]")
+            raise ValueError(
+                f"distance_m must be [near, far] with near < far, got [{lo:g}, {hi:g}]"
+            )
         return self
 
 
 class VesselsSpec(_Spec):
     """Vessels in the scene: an explicit list, a sampler, or both."""
 
-    placed: list[PlacedVessel] = Field(default_factory=list, description="Vessels at explicit places.")
-    sample: VesselSampler | None = Field(None, description="Vessels drawn at random (added to `placed`).")
+    placed: list[PlacedVessel] = Field(
+        default_factory=list, description="Vessels at explicit places."
+    )
+    sample: VesselSampler | None = Field(
+        None, description="Vessels drawn at random (added to `placed`)."
+    )
 
 
 class HazeSpec(_Spec):
@@ -113,30 +302,93 @@ class HazeSpec(_Spec):
 
     levels: list[Annotated[float, Field(gt=0.0, le=1.0e6)]] = Field(
         default_factory=lambda: [float(v) for v in GRADED_LEVELS_M],
-        description="Visibilities to render (`--vis` overrides); default the 11 graded levels.", json_schema_extra=_unit("m"))
-    threshold: Threshold = Field(Threshold.KOSCHMIEDER, description="Contrast threshold linking visibility to extinction: `koschmieder` (2 %, sigma = 3.912/V) or `mor` (5 %, sigma = 2.996/V).")
-    albedo: float = Field(0.998, ge=0.0, le=1.0, description="Single-scattering albedo of the haze particles (sea salt and droplets barely absorb).", json_schema_extra=_unit("1"))
-    g: float = Field(0.75, ge=-0.99, le=0.99, description="Henyey–Greenstein asymmetry parameter of the haze phase function.", json_schema_extra=_unit("1"))
-    top_m: float = Field(300.0, gt=0.0, le=5000.0, description="Height of the top of the haze layer above sea level.", json_schema_extra=_unit("m"))
+        description="Visibilities to render (`--vis` overrides); default the 11 graded levels.",
+        json_schema_extra=_unit("m"),
+    )
+    threshold: Threshold = Field(
+        Threshold.KOSCHMIEDER,
+        description="Contrast threshold linking visibility to extinction: `koschmieder` (2 %, "
+        "sigma = 3.912/V) or `mor` (5 %, sigma = 2.996/V).",
+    )
+    albedo: float = Field(
+        0.998,
+        ge=0.0,
+        le=1.0,
+        description="Single-scattering albedo of the haze particles (sea salt and droplets "
+        "barely absorb).",
+        json_schema_extra=_unit("1"),
+    )
+    g: float = Field(
+        0.75,
+        ge=-0.99,
+        le=0.99,
+        description="Henyey–Greenstein asymmetry parameter of the haze phase function.",
+        json_schema_extra=_unit("1"),
+    )
+    top_m: float = Field(
+        300.0,
+        gt=0.0,
+        le=5000.0,
+        description="Height of the top of the haze layer above sea level.",
+        json_schema_extra=_unit("m"),
+    )
 
 
 class RenderSpec(_Spec):
     """How the scene is rendered."""
 
-    mode: Literal["reference", "asm"] = Field("asm", description="Hazy-level renderer: `asm` composite from the clean image and distance, or `reference` Mitsuba volpath.")
-    spp: int = Field(64, ge=1, le=65536, description="Samples per pixel of the clean and `reference` renders (`--spp` overrides).")
-    seed: int = Field(0, ge=0, le=2**31 - 1, description="Master seed: sampling noise, and the sea and layout when they have no seed of their own (`--seed` overrides).")
-    variant: str = Field("auto", description="Mitsuba variant: `auto` (cuda, then llvm, then scalar) or a name such as `llvm_ad_rgb`.")
-    max_depth: int = Field(64, ge=-1, le=4096, description="Longest light path of the `reference` mode (-1: unbounded, Russian roulette only).")
-    airlight_spp: int = Field(1024, ge=16, le=1 << 20, description="Samples per pixel of the small horizon render that gives the `asm` airlight.")
-    exposure: float | Literal["auto"] = Field("auto", description="Linear exposure applied before sRGB encoding; `auto` maps the clean image's horizon sky to 0.6.")
+    mode: Literal["reference", "asm"] = Field(
+        "asm",
+        description="Hazy-level renderer: `asm` composite from the clean image and distance, "
+        "or `reference` Mitsuba volpath.",
+    )
+    spp: int = Field(
+        64,
+        ge=1,
+        le=65536,
+        description="Samples per pixel of the clean and `reference` renders (`--spp` overrides).",
+    )
+    seed: int = Field(
+        0,
+        ge=0,
+        le=2**31 - 1,
+        description="Master seed: sampling noise, and the sea and layout when they have no "
+        "seed of their own (`--seed` overrides).",
+    )
+    variant: str = Field(
+        "auto",
+        description="Mitsuba variant: `auto` (cuda, then llvm, then scalar) or a name such as "
+        "`llvm_ad_rgb`.",
+    )
+    max_depth: int = Field(
+        64,
+        ge=-1,
+        le=4096,
+        description="Longest light path of the `reference` mode (-1: unbounded, Russian "
+        "roulette only).",
+    )
+    airlight_spp: int = Field(
+        1024,
+        ge=16,
+        le=1 << 20,
+        description="Samples per pixel of the small horizon render that gives the `asm` airlight.",
+    )
+    exposure: float | Literal["auto"] = Field(
+        "auto",
+        description="Linear exposure applied before sRGB encoding; `auto` maps the clean "
+        "image's horizon sky to 0.6.",
+    )
     write_exr: bool = Field(True, description="Also write linear radiance as EXR for every image.")
 
 
 class SceneSpec(_Spec):
     """A whole scene: camera, sun, sky, sea, vessels, haze and render settings."""
 
-    name: str | None = Field(None, pattern=r"^[A-Za-z0-9_.-]{1,64}$", description="Scene name used for file names; default the YAML file's stem.")
+    name: str | None = Field(
+        None,
+        pattern=r"^[A-Za-z0-9_.-]{1,64}$",
+        description="Scene name used for file names; default the YAML file's stem.",
+    )
     camera: CameraSpec = Field(default_factory=CameraSpec)
     sun: SunSpec = Field(default_factory=SunSpec)
     sky: SkySpec = Field(default_factory=SkySpec)

@@ -77,9 +77,13 @@ def visibility_from_extinction(
     return -math.log(CONTRAST_THRESHOLD[Threshold(threshold)]) / sigma_per_m
 
 
-def koschmieder_contrast(distance_m: float | np.ndarray, visibility_m: float,
-                         threshold: Threshold | str = Threshold.KOSCHMIEDER) -> float | np.ndarray:
-    """Apparent contrast of a black target at ``distance_m`` against the horizon: ``-exp(-sigma d)``."""
+def koschmieder_contrast(
+    distance_m: float | np.ndarray,
+    visibility_m: float,
+    threshold: Threshold | str = Threshold.KOSCHMIEDER,
+) -> float | np.ndarray:
+    """Apparent contrast of a black target at ``distance_m`` against the horizon: "
+    "``-exp(-sigma d)``."""
     return -np.exp(-extinction_coefficient(visibility_m, threshold) * np.asarray(distance_m))
 
 
@@ -110,7 +114,9 @@ REGULATION_CLASSES: tuple[RegulationClass, ...] = (
 def regulation_class(visibility_m: float) -> RegulationClass:
     """The navigation regulation class for a visibility in metres (paper, Table 1)."""
     if math.isnan(visibility_m) or visibility_m < 0:
-        raise ValueError(f"visibility must be a non-negative distance in metres, got {visibility_m}")
+        raise ValueError(
+            f"visibility must be a non-negative distance in metres, got {visibility_m}"
+        )
     for cls in REGULATION_CLASSES:
         if visibility_m < cls.upper_m:
             return cls

@@ -44,6 +44,7 @@ EXIT_INPUT = 2
 def _guarded(command: str) -> Callable[[Handler], Handler]:
     """Turn :class:`MetricInputError` (and OS errors on our own files) into a one-line message
     on stderr and exit code 2, so bad input never shows a traceback."""
+
     def decorate(handler: Handler) -> Handler:
         @wraps(handler)
         def run(args: argparse.Namespace) -> int:
@@ -53,10 +54,14 @@ def _guarded(command: str) -> Callable[[Handler], Handler]:
                 print(f"seahaze metric {command}: error: {exc}", file=sys.stderr)
             except OSError as exc:
                 where = f"{exc.filename}: " if exc.filename else ""
-                print(f"seahaze metric {command}: error: {where}{exc.strerror or exc}",
-                      file=sys.stderr)
+                print(
+                    f"seahaze metric {command}: error: {where}{exc.strerror or exc}",
+                    file=sys.stderr,
+                )
             return EXIT_INPUT
+
         return run
+
     return decorate
 
 
@@ -68,10 +73,14 @@ def _warn_non_monotone(table: CalibrationTable) -> None:
     """Report where mAP50 does not rise with visibility and the rule applied there."""
     bad = table.violations()
     if bad:
-        pairs = ", ".join(f"{a.visibility_m:g} m ({a.map50:.4f}) -> {b.visibility_m:g} m "
-                          f"({b.map50:.4f})" for a, b in bad)
-        _warn(f"table is not monotone: mAP50 does not increase at {pairs}; Eq. 5 is applied to "
-              "its running maximum, taking the lowest visibility (docs/metric.md)")
+        pairs = ", ".join(
+            f"{a.visibility_m:g} m ({a.map50:.4f}) -> {b.visibility_m:g} m ({b.map50:.4f})"
+            for a, b in bad
+        )
+        _warn(
+            f"table is not monotone: mAP50 does not increase at {pairs}; Eq. 5 is applied to "
+            "its running maximum, taking the lowest visibility (docs/metric.md)"
+        )
 
 
 # --------------------------------------------------------------------------------------------
@@ -79,21 +88,33 @@ def _warn_non_monotone(table: CalibrationTable) -> None:
 
 
 def _results_table(results: list[LevelResult]) -> list[str]:
-    lines = [f"{'level':<8}{'vis_m':>7}{'images':>8}{'objects':>9}{'dets':>8}"
-             f"{'mAP50':>9}{'mAP50-95':>10}"]
+    lines = [
+        f"{'level':<8}{'vis_m':>7}{'images':>8}{'objects':>9}{'dets':>8}"
+        f"{'mAP50':>9}{'mAP50-95':>10}"
+    ]
     for r in results:
         s = r.scores
         vis = "-" if r.visibility_m is None else f"{r.visibility_m:g}"
-        lines.append(f"{r.level:<8}{vis:>7}{s.images:>8}{s.objects:>9}{s.detections:>8}"
-                     f"{format_score(s.map50):>9}{format_score(s.map50_95):>10}")
+        lines.append(
+            f"{r.level:<8}{vis:>7}{s.images:>8}{s.objects:>9}{s.detections:>8}"
+            f"{format_score(s.map50):>9}{format_score(s.map50_95):>10}"
+        )
     return lines
 
 
 def _result_json(r: LevelResult) -> dict[str, object]:
     s = r.scores
-    return {"level": r.level, "visibility_m": r.visibility_m, "map50": s.map50,
-            "map50_95": s.map50_95, "ap50_per_class": s.ap50_per_class, "images": s.images,
-            "objects": s.objects, "detections": s.detections, "pred_dir": str(r.pred_dir)}
+    return {
+        "level": r.level,
+        "visibility_m": r.visibility_m,
+        "map50": s.map50,
+        "map50_95": s.map50_95,
+        "ap50_per_class": s.ap50_per_class,
+        "images": s.images,
+        "objects": s.objects,
+        "detections": s.detections,
+        "pred_dir": str(r.pred_dir),
+    }
 
 
 @_guarded("eval")
@@ -103,8 +124,15 @@ def cmd_eval(args: argparse.Namespace) -> int:
     level = parse_level(args.level) if args.level else None
     results = evaluate_levels(dataset, args.pred, level=level, max_dets=args.max_dets)
     if args.json:
-        print(json.dumps({"evaluator": evaluator_name(args.max_dets),
-                          "levels": [_result_json(r) for r in results]}, indent=2))
+        print(
+            json.dumps(
+                {
+                    "evaluator": evaluator_name(args.max_dets),
+                    "levels": [_result_json(r) for r in results],
+                },
+                indent=2,
+            )
+        )
     else:
         print("\n".join(_results_table(results)))
         print(f"({evaluator_name(args.max_dets)})")
@@ -122,8 +150,10 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     table, results = calibrate(dataset, args.pred, args.detector, max_dets=args.max_dets)
     csv_path, json_path = save_table(table, args.out)
     print("\n".join(_results_table(results)))
-    print(f"calibration table of {table.detector} ({len(table.points)} levels) written to "
-          f"{csv_path} and {json_path}")
+    print(
+        f"calibration table of {table.detector} ({len(table.points)} levels) written to "
+        f"{csv_path} and {json_path}"
+    )
     _warn_non_monotone(table)
     return 0
 
@@ -136,29 +166,34 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 def cmd_newvis(args: argparse.Namespace) -> int:
     """``seahaze metric newvis``: New Visibility, gain and regulation class of a restored mAP50."""
     if (args.map is None) == (args.pred is None):
-        raise MetricInputError("give either --map VALUE or --pred DIR (with --dataset and "
-                               "--level)")
+        raise MetricInputError("give either --map VALUE or --pred DIR (with --dataset and --level)")
     table = load_table(args.table)
     level = parse_level(args.level) if args.level else None
     if level == CLEAN:
-        raise MetricInputError("--level clean has no visibility; give the hazy level the "
-                               "restored images came from (e.g. 800 or v0800)")
+        raise MetricInputError(
+            "--level clean has no visibility; give the hazy level the "
+            "restored images came from (e.g. 800 or v0800)"
+        )
     level_m = level_visibility_m(level) if level else None
     if args.pred is not None:
         if args.dataset is None or level is None:
             raise MetricInputError("--pred needs --dataset DIR and --level (e.g. v0800)")
         dataset = load_dataset(args.dataset)
-        scores = evaluate_level(dataset, level, args.pred, allow_flat=True,
-                                max_dets=args.max_dets).scores
+        scores = evaluate_level(
+            dataset, level, args.pred, allow_flat=True, max_dets=args.max_dets
+        ).scores
         if scores.map50 is None:
-            raise MetricInputError(f"{dataset.label_dir(level)}: no labelled objects, so mAP50 "
-                                   "is undefined")
+            raise MetricInputError(
+                f"{dataset.label_dir(level)}: no labelled objects, so mAP50 is undefined"
+            )
         if not same_evaluator(table.evaluator, args.max_dets):
             # Not fatal: a CSV table carries no evaluator, but the user must know the values may
             # come from a different AP definition (e.g. Ultralytics' val).
-            _warn(f"table {args.table} was not built by this evaluator "
-                  f"({table.evaluator or 'unknown'}); mAP50 from different evaluators is not "
-                  "interchangeable")
+            _warn(
+                f"table {args.table} was not built by this evaluator "
+                f"({table.evaluator or 'unknown'}); mAP50 from different evaluators is not "
+                "interchangeable"
+            )
         value = scores.map50
     else:
         value = args.map
@@ -166,16 +201,32 @@ def cmd_newvis(args: argparse.Namespace) -> int:
     _warn_non_monotone(table)
     if args.json:
         cls = result.regulation
-        print(json.dumps({
-            "detector": table.detector, "map50": result.map50, "bound": str(result.bound),
-            "visibility_m": result.visibility_m,
-            "visibility_m_rounded": round_m(result.visibility_m),
-            "level_m": result.level_m, "gain_m": result.gain_m,
-            "regulation": {"key": cls.key, "label": cls.label, "haze": cls.haze,
-                           "range": class_range(cls),
-                           "qualifier": {Bound.WITHIN: None, Bound.ABOVE: "at least",
-                                         Bound.BELOW: "at most"}[result.bound]},
-            "table_monotone": table.is_monotone}, indent=2))
+        print(
+            json.dumps(
+                {
+                    "detector": table.detector,
+                    "map50": result.map50,
+                    "bound": str(result.bound),
+                    "visibility_m": result.visibility_m,
+                    "visibility_m_rounded": round_m(result.visibility_m),
+                    "level_m": result.level_m,
+                    "gain_m": result.gain_m,
+                    "regulation": {
+                        "key": cls.key,
+                        "label": cls.label,
+                        "haze": cls.haze,
+                        "range": class_range(cls),
+                        "qualifier": {
+                            Bound.WITHIN: None,
+                            Bound.ABOVE: "at least",
+                            Bound.BELOW: "at most",
+                        }[result.bound],
+                    },
+                    "table_monotone": table.is_monotone,
+                },
+                indent=2,
+            )
+        )
     else:
         name = table.detector or Path(args.table).name
         lo, hi = table.points[0].visibility_m, table.points[-1].visibility_m
@@ -188,61 +239,101 @@ def _cmd_help(parser: argparse.ArgumentParser) -> Handler:
     def run(_args: argparse.Namespace) -> int:
         parser.print_help(sys.stderr)
         return EXIT_INPUT
+
     return run
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Add the ``metric`` command (eval, calibrate, newvis) to the main CLI's subparsers."""
     metric = subparsers.add_parser(
-        "metric", help="detector-based visibility metric (MSVD paper, Eq. 5)",
+        "metric",
+        help="detector-based visibility metric (MSVD paper, Eq. 5)",
         description="Visibility metric of the MSVD paper: mAP50 per level (eval), a detector's "
-                    "visibility-mAP50 table (calibrate), and the New Visibility of restored "
-                    "images (newvis). See docs/metric.md.")
+        "visibility-mAP50 table (calibrate), and the New Visibility of restored "
+        "images (newvis). See docs/metric.md.",
+    )
     metric.set_defaults(func=_cmd_help(metric))
     sub = metric.add_subparsers(dest="metric_command", metavar="{eval,calibrate,newvis}")
 
-    max_dets = {"type": int, "default": DEFAULT_MAX_DETS, "metavar": "N",
-                "help": f"detections kept per image and class, by confidence "
-                        f"(COCO maxDets; default {DEFAULT_MAX_DETS})"}
+    max_dets = {
+        "type": int,
+        "default": DEFAULT_MAX_DETS,
+        "metavar": "N",
+        "help": f"detections kept per image and class, by confidence "
+        f"(COCO maxDets; default {DEFAULT_MAX_DETS})",
+    }
 
-    ev = sub.add_parser("eval", help="mAP50 and mAP50-95 of YOLO predictions per level",
-                        description="COCO mAP50 and mAP50-95 (faster_coco_eval) of YOLO-format "
-                                    "predictions 'class cx cy w h conf' against the dataset's "
-                                    "labels, per level.")
-    ev.add_argument("--dataset", required=True, type=Path, metavar="DIR",
-                    help="seahaze dataset (data.yaml, images/<level>/, labels/<level>/)")
-    ev.add_argument("--pred", required=True, type=Path, metavar="PRED_DIR",
-                    help="predictions: PRED_DIR/<level>/<scene>.txt (or PRED_DIR/<scene>.txt "
-                         "with --level)")
+    ev = sub.add_parser(
+        "eval",
+        help="mAP50 and mAP50-95 of YOLO predictions per level",
+        description="COCO mAP50 and mAP50-95 (faster_coco_eval) of YOLO-format "
+        "predictions 'class cx cy w h conf' against the dataset's "
+        "labels, per level.",
+    )
+    ev.add_argument(
+        "--dataset",
+        required=True,
+        type=Path,
+        metavar="DIR",
+        help="seahaze dataset (data.yaml, images/<level>/, labels/<level>/)",
+    )
+    ev.add_argument(
+        "--pred",
+        required=True,
+        type=Path,
+        metavar="PRED_DIR",
+        help="predictions: PRED_DIR/<level>/<scene>.txt (or PRED_DIR/<scene>.txt with --level)",
+    )
     ev.add_argument("--level", help="only this level (v1000, 1000 or clean)")
     ev.add_argument("--max-dets", **max_dets)
     ev.add_argument("--json", action="store_true", help="print JSON instead of a table")
     ev.set_defaults(func=cmd_eval)
 
-    cal = sub.add_parser("calibrate", help="build a detector's visibility -> mAP50 table",
-                         description="Score a detector's predictions on every hazy level and "
-                                     "save the table as OUT.csv (visibility_m,map50) and "
-                                     "OUT.json (with the detector's name).")
+    cal = sub.add_parser(
+        "calibrate",
+        help="build a detector's visibility -> mAP50 table",
+        description="Score a detector's predictions on every hazy level and "
+        "save the table as OUT.csv (visibility_m,map50) and "
+        "OUT.json (with the detector's name).",
+    )
     cal.add_argument("--dataset", required=True, type=Path, metavar="DIR")
-    cal.add_argument("--pred", required=True, type=Path, metavar="PRED_DIR",
-                     help="the detector's predictions on the hazy images: "
-                          "PRED_DIR/<level>/<scene>.txt for every level")
-    cal.add_argument("--detector", required=True, metavar="NAME",
-                     help="detector name stored in the table (e.g. yolo11n)")
-    cal.add_argument("--out", required=True, type=Path, metavar="T",
-                     help="output path; writes T.csv and T.json")
+    cal.add_argument(
+        "--pred",
+        required=True,
+        type=Path,
+        metavar="PRED_DIR",
+        help="the detector's predictions on the hazy images: "
+        "PRED_DIR/<level>/<scene>.txt for every level",
+    )
+    cal.add_argument(
+        "--detector",
+        required=True,
+        metavar="NAME",
+        help="detector name stored in the table (e.g. yolo11n)",
+    )
+    cal.add_argument(
+        "--out", required=True, type=Path, metavar="T", help="output path; writes T.csv and T.json"
+    )
     cal.add_argument("--max-dets", **max_dets)
     cal.set_defaults(func=cmd_calibrate)
 
-    nv = sub.add_parser("newvis", help="New Visibility, gain and regulation class",
-                        description="Map a restored mAP50 (given, or computed from dehazed "
-                                    "predictions) to a visibility with the calibration table "
-                                    "(Eq. 5) and report the gain and regulation class.")
-    nv.add_argument("--table", required=True, type=Path, metavar="T",
-                    help="calibration table (.json or .csv)")
+    nv = sub.add_parser(
+        "newvis",
+        help="New Visibility, gain and regulation class",
+        description="Map a restored mAP50 (given, or computed from dehazed "
+        "predictions) to a visibility with the calibration table "
+        "(Eq. 5) and report the gain and regulation class.",
+    )
+    nv.add_argument(
+        "--table", required=True, type=Path, metavar="T", help="calibration table (.json or .csv)"
+    )
     nv.add_argument("--map", type=float, metavar="VALUE", help="restored mAP50 in [0, 1]")
-    nv.add_argument("--pred", type=Path, metavar="PRED_DIR",
-                    help="predictions on the dehazed images of --level (instead of --map)")
+    nv.add_argument(
+        "--pred",
+        type=Path,
+        metavar="PRED_DIR",
+        help="predictions on the dehazed images of --level (instead of --map)",
+    )
     nv.add_argument("--dataset", type=Path, metavar="DIR", help="dataset for --pred")
     nv.add_argument("--level", help="visibility of the hazy input (800 or v0800)")
     nv.add_argument("--max-dets", **max_dets)

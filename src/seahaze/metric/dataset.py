@@ -64,7 +64,8 @@ def parse_level(text: str) -> str:
     match = _LEVEL_ARG.match(value)
     if not match or float(match[1]) <= 0 or not float(match[1]).is_integer():
         raise MetricInputError(
-            f"--level {text!r}: expected whole metres (800), a level folder (v0800) or 'clean'")
+            f"--level {text!r}: expected whole metres (800), a level folder (v0800) or 'clean'"
+        )
     return level_name(float(match[1]))
 
 
@@ -95,8 +96,12 @@ class YoloBox:
 
     def to_pixels(self, width: int, height: int) -> tuple[float, float, float, float]:
         """The box as COCO ``[x_min, y_min, width, height]`` in pixels of a width×height image."""
-        return ((self.cx - self.w / 2) * width, (self.cy - self.h / 2) * height,
-                self.w * width, self.h * height)
+        return (
+            (self.cx - self.w / 2) * width,
+            (self.cy - self.h / 2) * height,
+            self.w * width,
+            self.h * height,
+        )
 
 
 LABEL_FORMAT = "class cx cy w h"
@@ -110,19 +115,23 @@ def parse_yolo_line(text: str, num_classes: int, *, with_conf: bool) -> YoloBox:
     expected = 6 if with_conf else 5
     fmt = PRED_FORMAT if with_conf else LABEL_FORMAT
     if len(fields) != expected:
-        hint = (" (predictions need the confidence column; Ultralytics writes it with "
-                "save_conf=True)" if with_conf and len(fields) == 5 else "")
-        raise MetricInputError(
-            f"expected {expected} values '{fmt}', got {len(fields)}{hint}")
+        hint = (
+            " (predictions need the confidence column; Ultralytics writes it with save_conf=True)"
+            if with_conf and len(fields) == 5
+            else ""
+        )
+        raise MetricInputError(f"expected {expected} values '{fmt}', got {len(fields)}{hint}")
     try:
         class_id = int(fields[0])
     except ValueError:
         raise MetricInputError(
-            f"class must be an integer in 0..{num_classes - 1}, got {fields[0]!r}") from None
+            f"class must be an integer in 0..{num_classes - 1}, got {fields[0]!r}"
+        ) from None
     if not 0 <= class_id < num_classes:
         raise MetricInputError(
             f"class {class_id} out of range; data.yaml names {num_classes} classes "
-            f"(0..{num_classes - 1})")
+            f"(0..{num_classes - 1})"
+        )
     values: list[float] = []
     for name, raw in zip(fmt.split()[1:], fields[1:], strict=True):
         try:
@@ -147,8 +156,11 @@ def read_yolo_file(path: Path, num_classes: int, *, with_conf: bool) -> list[Yol
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        raise located(path, f"cannot read ({exc.__class__.__name__}); expected a text file "
-                            f"of '{PRED_FORMAT if with_conf else LABEL_FORMAT}' lines") from None
+        raise located(
+            path,
+            f"cannot read ({exc.__class__.__name__}); expected a text file "
+            f"of '{PRED_FORMAT if with_conf else LABEL_FORMAT}' lines",
+        ) from None
     boxes: list[YoloBox] = []
     for number, line in enumerate(text.splitlines(), start=1):
         if not line.strip():
@@ -204,8 +216,7 @@ def _class_names(path: Path, doc: object) -> tuple[str, ...]:
     if isinstance(names, dict) and names:
         keys = sorted(names, key=str)
         if sorted(k for k in keys if isinstance(k, int)) != list(range(len(keys))):
-            raise located(path, "names must map the class ids 0..N-1 to names, got ids "
-                                f"{keys}")
+            raise located(path, f"names must map the class ids 0..N-1 to names, got ids {keys}")
         return tuple(str(names[k]) for k in range(len(keys)))
     raise located(path, "missing 'names' (a list or a {0: name, 1: ...} mapping of classes)")
 
@@ -220,8 +231,10 @@ def load_dataset(root: Path | str) -> Dataset:
         raise located(root, "dataset folder not found")
     data_yaml = root / "data.yaml"
     if not data_yaml.is_file():
-        raise located(data_yaml, "missing; a seahaze dataset has data.yaml, images/<level>/ "
-                                 "and labels/<level>/")
+        raise located(
+            data_yaml,
+            "missing; a seahaze dataset has data.yaml, images/<level>/ and labels/<level>/",
+        )
     try:
         doc = yaml.safe_load(data_yaml.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
@@ -241,8 +254,10 @@ def _image_size(path: Path) -> tuple[int, int]:
         with Image.open(path) as img:  # reads the header only
             return img.size
     except (OSError, UnidentifiedImageError) as exc:
-        raise located(path, f"cannot read the image size ({exc.__class__.__name__}); "
-                            f"expected a PNG/JPEG image") from None
+        raise located(
+            path,
+            f"cannot read the image size ({exc.__class__.__name__}); expected a PNG/JPEG image",
+        ) from None
 
 
 def scene_images(dataset: Dataset, level: str) -> dict[str, Path]:
@@ -250,8 +265,9 @@ def scene_images(dataset: Dataset, level: str) -> dict[str, Path]:
     holds two images of the same scene."""
     folder = dataset.image_dir(level)
     if not folder.is_dir():
-        raise located(folder, f"level {level!r} not in the dataset (levels: "
-                              f"{', '.join(dataset.levels)})")
+        raise located(
+            folder, f"level {level!r} not in the dataset (levels: {', '.join(dataset.levels)})"
+        )
     scenes: dict[str, Path] = {}
     for path in sorted(folder.iterdir()):
         if path.suffix.lower() not in IMAGE_SUFFIXES or not path.is_file():
@@ -276,14 +292,16 @@ def load_level_truth(dataset: Dataset, level: str) -> list[ImageTruth]:
         raise located(label_dir, f"missing; expected one '{LABEL_FORMAT}' file per image")
     orphans = sorted(p.name for p in label_dir.glob("*.txt") if p.stem not in scenes)
     if orphans:
-        raise located(label_dir / orphans[0], f"label without an image in "
-                                              f"{dataset.image_dir(level)}")
+        raise located(
+            label_dir / orphans[0], f"label without an image in {dataset.image_dir(level)}"
+        )
     truth: list[ImageTruth] = []
     for name, image in scenes.items():
         label = label_dir / f"{name}.txt"
         if not label.is_file():
-            raise located(label, f"missing label file for {image.name} (an empty file means "
-                                 "no objects)")
+            raise located(
+                label, f"missing label file for {image.name} (an empty file means no objects)"
+            )
         width, height = _image_size(image)
         boxes = read_yolo_file(label, len(dataset.names), with_conf=False)
         truth.append(ImageTruth(name, width, height, tuple(boxes)))
@@ -302,14 +320,18 @@ def prediction_dir(pred_root: Path | str, level: str, *, allow_flat: bool) -> Pa
     if allow_flat and not others:
         return root
     if others:
-        raise located(root / level, f"missing, but {root} has folders for other levels "
-                                    f"({', '.join(sort_levels(others))})")
-    raise located(root / level, f"missing; predictions for level {level} go in "
-                                f"PRED/{level}/<scene>.txt")
+        raise located(
+            root / level,
+            f"missing, but {root} has folders for other levels ({', '.join(sort_levels(others))})",
+        )
+    raise located(
+        root / level, f"missing; predictions for level {level} go in PRED/{level}/<scene>.txt"
+    )
 
 
-def load_predictions(folder: Path, scenes: Iterable[str],
-                     num_classes: int) -> Mapping[str, list[YoloBox]]:
+def load_predictions(
+    folder: Path, scenes: Iterable[str], num_classes: int
+) -> Mapping[str, list[YoloBox]]:
     """Scene → predicted boxes from ``folder/<scene>.txt`` (``class cx cy w h conf``).
 
     A missing file is an image without detections. A ``.txt`` file whose scene is not in the
@@ -318,9 +340,12 @@ def load_predictions(folder: Path, scenes: Iterable[str],
     wanted = set(scenes)
     stray = sorted(p.name for p in folder.glob("*.txt") if p.stem not in wanted)
     if stray:
-        raise located(folder / stray[0], f"prediction for a scene that is not in the level "
-                                         f"({len(stray)} such file(s)); file names must match "
-                                         "the image names")
+        raise located(
+            folder / stray[0],
+            f"prediction for a scene that is not in the level "
+            f"({len(stray)} such file(s)); file names must match "
+            "the image names",
+        )
     out: dict[str, list[YoloBox]] = {}
     for name in sorted(wanted):
         path = folder / f"{name}.txt"

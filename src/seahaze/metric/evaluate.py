@@ -39,15 +39,20 @@ DEFAULT_MAX_DETS = 100
 
 def evaluator_name(max_dets: int = DEFAULT_MAX_DETS) -> str:
     """The evaluator tag stored in calibration tables (which AP implementation and settings)."""
-    return (f"faster_coco_eval {faster_coco_eval.__version__}: COCO bbox AP, 101-point "
-            f"interpolation, maxDets={max_dets}")
+    return (
+        f"faster_coco_eval {faster_coco_eval.__version__}: COCO bbox AP, 101-point "
+        f"interpolation, maxDets={max_dets}"
+    )
 
 
 def same_evaluator(tag: str | None, max_dets: int = DEFAULT_MAX_DETS) -> bool:
     """Whether a table's evaluator tag is this module's COCO evaluator with ``max_dets``
     (any faster_coco_eval version: they all reproduce pycocotools)."""
-    return tag is not None and tag.startswith("faster_coco_eval ") and tag.endswith(
-        f"maxDets={max_dets}")
+    return (
+        tag is not None
+        and tag.startswith("faster_coco_eval ")
+        and tag.endswith(f"maxDets={max_dets}")
+    )
 
 
 @dataclass(frozen=True)
@@ -65,9 +70,11 @@ class CocoScores:
     detections: int = 0
 
 
-def build_coco(truth: Sequence[ImageTruth], predictions: Mapping[str, Sequence[YoloBox]],
-               class_names: Sequence[str]) -> tuple[dict[str, list[dict[str, object]]],
-                                                    list[dict[str, object]]]:
+def build_coco(
+    truth: Sequence[ImageTruth],
+    predictions: Mapping[str, Sequence[YoloBox]],
+    class_names: Sequence[str],
+) -> tuple[dict[str, list[dict[str, object]]], list[dict[str, object]]]:
     """COCO ground-truth dictionary and detection list for YOLO boxes.
 
     Boxes are converted to pixels with each image's own size. Ids start at 1 because
@@ -80,19 +87,33 @@ def build_coco(truth: Sequence[ImageTruth], predictions: Mapping[str, Sequence[Y
     if unknown:
         raise MetricInputError(f"predictions for scenes without ground truth: {unknown[:3]}")
     for image_id, img in enumerate(truth, start=1):
-        images.append({"id": image_id, "file_name": img.name, "width": img.width,
-                       "height": img.height})
+        images.append(
+            {"id": image_id, "file_name": img.name, "width": img.width, "height": img.height}
+        )
         for box in img.boxes:
             x, y, w, h = box.to_pixels(img.width, img.height)
-            annotations.append({"id": len(annotations) + 1, "image_id": image_id,
-                                "category_id": box.class_id + 1, "bbox": [x, y, w, h],
-                                "area": w * h, "iscrowd": 0})
+            annotations.append(
+                {
+                    "id": len(annotations) + 1,
+                    "image_id": image_id,
+                    "category_id": box.class_id + 1,
+                    "bbox": [x, y, w, h],
+                    "area": w * h,
+                    "iscrowd": 0,
+                }
+            )
     for name, boxes in predictions.items():
         img = truth[index[name] - 1]
         for box in boxes:
             x, y, w, h = box.to_pixels(img.width, img.height)
-            detections.append({"image_id": index[name], "category_id": box.class_id + 1,
-                               "bbox": [x, y, w, h], "score": box.conf})
+            detections.append(
+                {
+                    "image_id": index[name],
+                    "category_id": box.class_id + 1,
+                    "bbox": [x, y, w, h],
+                    "score": box.conf,
+                }
+            )
     categories = [{"id": i + 1, "name": n} for i, n in enumerate(class_names)]
     return {"images": images, "annotations": annotations, "categories": categories}, detections
 
@@ -101,8 +122,13 @@ def _quiet(*_args: object, **_kwargs: object) -> None:
     """A print function that prints nothing (the evaluators log every step)."""
 
 
-def coco_scores(truth: Sequence[ImageTruth], predictions: Mapping[str, Sequence[YoloBox]],
-                class_names: Sequence[str], *, max_dets: int = DEFAULT_MAX_DETS) -> CocoScores:
+def coco_scores(
+    truth: Sequence[ImageTruth],
+    predictions: Mapping[str, Sequence[YoloBox]],
+    class_names: Sequence[str],
+    *,
+    max_dets: int = DEFAULT_MAX_DETS,
+) -> CocoScores:
     """mAP50, mAP50-95 and per-class AP50 of ``predictions`` against ``truth`` (faster_coco_eval).
 
     ``max_dets`` caps the detections per image and class (highest confidence first), COCO's
@@ -151,16 +177,24 @@ class LevelResult:
     pred_dir: Path
 
 
-def evaluate_level(dataset: Dataset, level: str, pred_root: Path | str, *,
-                   allow_flat: bool = False, max_dets: int = DEFAULT_MAX_DETS) -> LevelResult:
+def evaluate_level(
+    dataset: Dataset,
+    level: str,
+    pred_root: Path | str,
+    *,
+    allow_flat: bool = False,
+    max_dets: int = DEFAULT_MAX_DETS,
+) -> LevelResult:
     """Score the predictions of one level against the dataset's labels.
 
     Predictions are read from ``pred_root/<level>/`` or, when ``allow_flat``, from ``pred_root``
     itself. Raises :class:`MetricInputError` for missing or malformed files.
     """
     if level not in dataset.levels:
-        raise located(dataset.root / "images" / level,
-                      f"level {level!r} not in the dataset (levels: {', '.join(dataset.levels)})")
+        raise located(
+            dataset.root / "images" / level,
+            f"level {level!r} not in the dataset (levels: {', '.join(dataset.levels)})",
+        )
     truth = load_level_truth(dataset, level)
     folder = prediction_dir(pred_root, level, allow_flat=allow_flat)
     preds = load_predictions(folder, (t.name for t in truth), len(dataset.names))
@@ -176,26 +210,37 @@ def prediction_levels(dataset: Dataset, pred_root: Path | str) -> list[str]:
     found = [p.name for p in root.iterdir() if p.is_dir() and is_level_name(p.name)]
     unknown = sorted(set(found) - set(dataset.levels))
     if unknown:
-        raise located(root / unknown[0], f"level folder not in the dataset (levels: "
-                                         f"{', '.join(dataset.levels)})")
+        raise located(
+            root / unknown[0],
+            f"level folder not in the dataset (levels: {', '.join(dataset.levels)})",
+        )
     return sort_levels(found)
 
 
-def evaluate_dataset(dataset: Dataset, pred_root: Path | str, *, level: str | None = None,
-                     max_dets: int = DEFAULT_MAX_DETS) -> list[LevelResult]:
+def evaluate_dataset(
+    dataset: Dataset,
+    pred_root: Path | str,
+    *,
+    level: str | None = None,
+    max_dets: int = DEFAULT_MAX_DETS,
+) -> list[LevelResult]:
     """Score every level that has predictions (or only ``level``, where ``pred_root`` may also be
     a flat folder of that level's files). Raises if there is nothing to evaluate."""
     if level is not None:
         return [evaluate_level(dataset, level, pred_root, allow_flat=True, max_dets=max_dets)]
     levels = prediction_levels(dataset, pred_root)
     if not levels:
-        raise located(pred_root, "no level folders (clean, v0300, ...); use PRED/<level>/"
-                                 "<scene>.txt, or pass --level for a folder of one level")
+        raise located(
+            pred_root,
+            "no level folders (clean, v0300, ...); use PRED/<level>/"
+            "<scene>.txt, or pass --level for a folder of one level",
+        )
     return [evaluate_level(dataset, lv, pred_root, max_dets=max_dets) for lv in levels]
 
 
-def calibrate(dataset: Dataset, pred_root: Path | str, detector: str, *,
-              max_dets: int = DEFAULT_MAX_DETS) -> tuple[CalibrationTable, list[LevelResult]]:
+def calibrate(
+    dataset: Dataset, pred_root: Path | str, detector: str, *, max_dets: int = DEFAULT_MAX_DETS
+) -> tuple[CalibrationTable, list[LevelResult]]:
     """Build the visibility → mAP50 table of a detector from its predictions on every hazy level
     of the dataset (paper, Stage 1).
 
@@ -206,26 +251,45 @@ def calibrate(dataset: Dataset, pred_root: Path | str, detector: str, *,
         raise MetricInputError("--detector must name the detector (e.g. yolo11n)")
     hazy = dataset.hazy_levels
     if len(hazy) < 2:
-        raise located(dataset.root / "images", f"calibration needs at least 2 hazy levels, "
-                                               f"found {len(hazy)}")
+        raise located(
+            dataset.root / "images", f"calibration needs at least 2 hazy levels, found {len(hazy)}"
+        )
     results = [evaluate_level(dataset, lv, pred_root, max_dets=max_dets) for lv in hazy]
     points = []
     for r in results:
         if r.scores.map50 is None or r.visibility_m is None:
-            raise located(dataset.label_dir(r.level), "no labelled objects at this level, so its "
-                                                      "mAP50 is undefined")
-        points.append(CalibrationPoint(r.visibility_m, r.scores.map50, level=r.level,
-                                       map50_95=r.scores.map50_95, images=r.scores.images,
-                                       objects=r.scores.objects,
-                                       detections=r.scores.detections))
+            raise located(
+                dataset.label_dir(r.level),
+                "no labelled objects at this level, so its mAP50 is undefined",
+            )
+        points.append(
+            CalibrationPoint(
+                r.visibility_m,
+                r.scores.map50,
+                level=r.level,
+                map50_95=r.scores.map50_95,
+                images=r.scores.images,
+                objects=r.scores.objects,
+                detections=r.scores.detections,
+            )
+        )
     extra: dict[str, object] = {}
     if CLEAN in dataset.levels and (Path(pred_root) / CLEAN).is_dir():
         clean = evaluate_level(dataset, CLEAN, pred_root, max_dets=max_dets)
         results.insert(0, clean)
-        extra["clean"] = {"map50": clean.scores.map50, "map50_95": clean.scores.map50_95,
-                          "images": clean.scores.images, "objects": clean.scores.objects}
-    table = make_table(points, detector=detector.strip(), evaluator=evaluator_name(max_dets),
-                       dataset=str(Path(dataset.root).resolve()), extra=extra)
+        extra["clean"] = {
+            "map50": clean.scores.map50,
+            "map50_95": clean.scores.map50_95,
+            "images": clean.scores.images,
+            "objects": clean.scores.objects,
+        }
+    table = make_table(
+        points,
+        detector=detector.strip(),
+        evaluator=evaluator_name(max_dets),
+        dataset=str(Path(dataset.root).resolve()),
+        extra=extra,
+    )
     return table, results
 
 

@@ -104,9 +104,14 @@ def running_max(values: Sequence[float]) -> tuple[float, ...]:
     return tuple(out)
 
 
-def make_table(points: Sequence[CalibrationPoint], *, detector: str | None = None,
-               evaluator: str | None = None, dataset: str | None = None,
-               extra: dict[str, object] | None = None) -> CalibrationTable:
+def make_table(
+    points: Sequence[CalibrationPoint],
+    *,
+    detector: str | None = None,
+    evaluator: str | None = None,
+    dataset: str | None = None,
+    extra: dict[str, object] | None = None,
+) -> CalibrationTable:
     """Validate ``points`` and return them as a :class:`CalibrationTable` sorted by visibility.
 
     Raises :class:`MetricInputError` for fewer than 2 points, a visibility that is not a finite
@@ -126,10 +131,12 @@ def make_table(points: Sequence[CalibrationPoint], *, detector: str | None = Non
     ordered = tuple(sorted(points, key=lambda p: p.visibility_m))
     for a, b in pairwise(ordered):
         if a.visibility_m == b.visibility_m:
-            raise MetricInputError(f"visibility {a.visibility_m:g} m appears twice; "
-                                   "give one row per level")
-    return CalibrationTable(ordered, detector=detector, evaluator=evaluator, dataset=dataset,
-                            extra=dict(extra or {}))
+            raise MetricInputError(
+                f"visibility {a.visibility_m:g} m appears twice; give one row per level"
+            )
+    return CalibrationTable(
+        ordered, detector=detector, evaluator=evaluator, dataset=dataset, extra=dict(extra or {})
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -172,8 +179,9 @@ class NewVisibility:
         return regulation_class(self.visibility_m)
 
 
-def new_visibility(table: CalibrationTable, map50: float,
-                   level_m: float | None = None) -> NewVisibility:
+def new_visibility(
+    table: CalibrationTable, map50: float, level_m: float | None = None
+) -> NewVisibility:
     """Map a restored mAP50 to a visibility with Eq. 5 on the table's monotone envelope.
 
     ``level_m`` is the physical visibility of the hazy images that were restored; it only feeds
@@ -201,7 +209,8 @@ def new_visibility(table: CalibrationTable, map50: float,
     lo = CalibrationPoint(pts[k - 1].visibility_m, env[k - 1], pts[k - 1].level)
     hi = pts[k]
     v = lo.visibility_m + (map50 - lo.map50) / (hi.map50 - lo.map50) * (
-        hi.visibility_m - lo.visibility_m)
+        hi.visibility_m - lo.visibility_m
+    )
     return NewVisibility(map50, v, Bound.WITHIN, (lo, hi), level_m)
 
 
@@ -226,9 +235,12 @@ def describe(result: NewVisibility, table: CalibrationTable) -> list[str]:
     lines = [f"mAP50: {result.map50:.4f}"]
     if result.bound is Bound.WITHIN:
         lo, hi = result.bracket or (table.points[0], table.points[0])
-        how = ("equals the first level" if lo is hi else
-               f"Eq. 5 between {lo.visibility_m:g} m (mAP50 {lo.map50:.4f}) and "
-               f"{hi.visibility_m:g} m (mAP50 {hi.map50:.4f})")
+        how = (
+            "equals the first level"
+            if lo is hi
+            else f"Eq. 5 between {lo.visibility_m:g} m (mAP50 {lo.map50:.4f}) and "
+            f"{hi.visibility_m:g} m (mAP50 {hi.map50:.4f})"
+        )
         if lo is not hi and not table.is_monotone:
             how += " of the table's running maximum"
         lines.append(f"new visibility: {v} m ({how})")
@@ -237,13 +249,15 @@ def describe(result: NewVisibility, table: CalibrationTable) -> list[str]:
     elif result.bound is Bound.ABOVE:
         lines.append(
             f"new visibility: > {v} m (beyond the table: mAP50 above its highest value, "
-            f"{max(table.map50s):.4f}; the paper prints '-')")
+            f"{max(table.map50s):.4f}; the paper prints '-')"
+        )
         regulation = f"at least {cls.label} ({class_range(cls)})"
         prefix = "> "
     else:
         lines.append(
             f"new visibility: <= {v} m (lower bound: mAP50 below the first level's "
-            f"{table.points[0].map50:.4f} at {v} m; not extrapolated)")
+            f"{table.points[0].map50:.4f} at {v} m; not extrapolated)"
+        )
         regulation = f"{cls.label} or stricter (visibility at most {v} m)"
         prefix = "<= "
     if result.level_m is not None and result.gain_m is not None:
@@ -317,14 +331,18 @@ def load_table(path: Path | str) -> CalibrationTable:
                 path = candidate
                 break
     if not path.is_file():
-        raise located(path, "calibration table not found (expected a .json or .csv file "
-                            "written by 'seahaze metric calibrate')")
+        raise located(
+            path,
+            "calibration table not found (expected a .json or .csv file "
+            "written by 'seahaze metric calibrate')",
+        )
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise located(path, f"cannot read the table ({exc})") from None
     is_json = path.suffix.lower() == ".json" or (
-        path.suffix.lower() != ".csv" and text.lstrip().startswith("{"))
+        path.suffix.lower() != ".csv" and text.lstrip().startswith("{")
+    )
     try:
         return _table_from_json(path, text) if is_json else _table_from_csv(path, text)
     except MetricInputError as exc:
@@ -359,12 +377,20 @@ def _table_from_csv(path: Path, text: str) -> CalibrationTable:
             header = [cell.lower() for cell in cells]
             missing = [c for c in CSV_COLUMNS if c not in header]
             if missing:
-                raise located(path, f"header must name the columns {','.join(CSV_COLUMNS)}, "
-                                    f"got {','.join(cells)!r}", line)
+                raise located(
+                    path,
+                    f"header must name the columns {','.join(CSV_COLUMNS)}, "
+                    f"got {','.join(cells)!r}",
+                    line,
+                )
             continue
         if len(cells) != len(header):
-            raise located(path, f"expected {len(header)} comma-separated values "
-                                f"({','.join(header)}), got {len(cells)}", line)
+            raise located(
+                path,
+                f"expected {len(header)} comma-separated values "
+                f"({','.join(header)}), got {len(cells)}",
+                line,
+            )
         vis = _number(path, line, "visibility_m", cells[header.index("visibility_m")])
         m = _number(path, line, "map50", cells[header.index("map50")])
         if vis <= 0:
@@ -373,8 +399,9 @@ def _table_from_csv(path: Path, text: str) -> CalibrationTable:
             raise located(path, f"map50 must be in [0, 1], got {m:g}", line)
         points.append(CalibrationPoint(vis, m))
     if header is None:
-        raise located(path, f"empty table; expected a header '{','.join(CSV_COLUMNS)}' and "
-                            "at least 2 rows")
+        raise located(
+            path, f"empty table; expected a header '{','.join(CSV_COLUMNS)}' and at least 2 rows"
+        )
     return make_table(points)
 
 
@@ -384,8 +411,9 @@ def _table_from_json(path: Path, text: str) -> CalibrationTable:
     except json.JSONDecodeError as exc:
         raise located(path, f"not valid JSON ({exc.msg})", exc.lineno) from None
     if not isinstance(doc, dict) or not isinstance(doc.get("levels"), list):
-        raise located(path, "expected a JSON object with a 'levels' list of "
-                            "{visibility_m, map50} objects")
+        raise located(
+            path, "expected a JSON object with a 'levels' list of {visibility_m, map50} objects"
+        )
     points: list[CalibrationPoint] = []
     for i, row in enumerate(doc["levels"]):
         if not isinstance(row, dict) or "visibility_m" not in row or "map50" not in row:
@@ -393,15 +421,26 @@ def _table_from_json(path: Path, text: str) -> CalibrationTable:
         where = f"levels[{i}]"
         vis = _number(path, None, f"{where}.visibility_m", row["visibility_m"])
         m = _number(path, None, f"{where}.map50", row["map50"])
-        points.append(CalibrationPoint(
-            vis, m, level=_opt_str(row.get("level")),
-            map50_95=_opt_float(row.get("map50_95")), images=_opt_int(row.get("images")),
-            objects=_opt_int(row.get("objects")), detections=_opt_int(row.get("detections"))))
+        points.append(
+            CalibrationPoint(
+                vis,
+                m,
+                level=_opt_str(row.get("level")),
+                map50_95=_opt_float(row.get("map50_95")),
+                images=_opt_int(row.get("images")),
+                objects=_opt_int(row.get("objects")),
+                detections=_opt_int(row.get("detections")),
+            )
+        )
     known = {"format", "detector", "metric", "evaluator", "dataset", "levels"}
     extra = {k: v for k, v in doc.items() if k not in known}
-    return make_table(points, detector=_opt_str(doc.get("detector")),
-                      evaluator=_opt_str(doc.get("evaluator")),
-                      dataset=_opt_str(doc.get("dataset")), extra=extra)
+    return make_table(
+        points,
+        detector=_opt_str(doc.get("detector")),
+        evaluator=_opt_str(doc.get("evaluator")),
+        dataset=_opt_str(doc.get("dataset")),
+        extra=extra,
+    )
 
 
 def _opt_str(value: object) -> str | None:

@@ -25,7 +25,8 @@ from ..visibility import extinction_coefficient
 HAZE_ID = "haze"
 HAZE_BOX_ID = "haze_box"
 BOX_OPTICAL_HALF_WIDTH = 8.0
-"""Minimum optical depth ``sigma * W`` from the camera to the side of the haze box (DESIGN.md §4)."""
+"""Minimum optical depth ``sigma * W`` from the camera to the side of the haze box (DESIGN.md "
+"§4)."""
 HAZE_BOTTOM_M = -60.0
 """Bottom of the haze box below sea level; the sea surface hides everything beneath it."""
 FAR_CLIP_M = 1.0e7
@@ -51,7 +52,9 @@ def haze_box_half_width(visibilities_m: list[float], threshold: str) -> float:
     return BOX_OPTICAL_HALF_WIDTH / sigma_min
 
 
-def _sensor_dict(camera: Camera, width: int, height: int, fov_deg: float, pitch_deg: float, inside_haze: bool) -> dict:
+def _sensor_dict(
+    camera: Camera, width: int, height: int, fov_deg: float, pitch_deg: float, inside_haze: bool
+) -> dict:
     mi = _mi()
     cam = Camera(camera.height_m, fov_deg, pitch_deg, camera.heading_deg, width, height)
     forward, _right, up = cam.basis()
@@ -62,9 +65,17 @@ def _sensor_dict(camera: Camera, width: int, height: int, fov_deg: float, pitch_
         "fov_axis": "x",
         "near_clip": 0.05,
         "far_clip": FAR_CLIP_M,
-        "to_world": mi.ScalarTransform4f().look_at(origin=origin.tolist(), target=(origin + forward).tolist(), up=up.tolist()),
+        "to_world": mi.ScalarTransform4f().look_at(
+            origin=origin.tolist(), target=(origin + forward).tolist(), up=up.tolist()
+        ),
         "sampler": {"type": "independent"},
-        "film": {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"}, "pixel_format": "rgb"},
+        "film": {
+            "type": "hdrfilm",
+            "width": width,
+            "height": height,
+            "rfilter": {"type": "box"},
+            "pixel_format": "rgb",
+        },
     }
     if inside_haze:
         sensor["medium"] = {"type": "ref", "id": HAZE_ID}
@@ -140,7 +151,9 @@ def shape_registry_id(shape: Any) -> int:
     return int(dr.reinterpret_array(mi.UInt32, ptr)[0]) if dr.is_jit_v(ptr) else id(shape)
 
 
-def build_scene(spec: SceneSpec, camera: Camera, geometry: SceneGeometry, visibilities_m: list[float]) -> LoadedScene:
+def build_scene(
+    spec: SceneSpec, camera: Camera, geometry: SceneGeometry, visibilities_m: list[float]
+) -> LoadedScene:
     """Load the Mitsuba scene for ``spec`` with a haze box wide enough for ``visibilities_m``."""
     mi = _mi()
     top = spec.haze.top_m
@@ -150,9 +163,18 @@ def build_scene(spec: SceneSpec, camera: Camera, geometry: SceneGeometry, visibi
     scene: dict[str, Any] = {
         "type": "scene",
         "integrator": {"type": "volpath", "max_depth": spec.render.max_depth, "rr_depth": 8},
-        HAZE_ID: {"type": "homogeneous", "sigma_t": 0.0, "albedo": spec.haze.albedo, "phase": {"type": "hg", "g": spec.haze.g}},
-        "sensor": _sensor_dict(camera, camera.width, camera.height, camera.fov_deg, camera.pitch_deg, inside),
-        "sensor_airlight": _sensor_dict(camera, AIRLIGHT_RES, AIRLIGHT_RES, AIRLIGHT_FOV_DEG, 0.0, inside),
+        HAZE_ID: {
+            "type": "homogeneous",
+            "sigma_t": 0.0,
+            "albedo": spec.haze.albedo,
+            "phase": {"type": "hg", "g": spec.haze.g},
+        },
+        "sensor": _sensor_dict(
+            camera, camera.width, camera.height, camera.fov_deg, camera.pitch_deg, inside
+        ),
+        "sensor_airlight": _sensor_dict(
+            camera, AIRLIGHT_RES, AIRLIGHT_RES, AIRLIGHT_FOV_DEG, 0.0, inside
+        ),
         "sky": {
             "type": "sunsky",
             "sun_direction": sun.tolist(),
@@ -163,7 +185,9 @@ def build_scene(spec: SceneSpec, camera: Camera, geometry: SceneGeometry, visibi
         },
         HAZE_BOX_ID: {
             "type": "cube",
-            "to_world": mi.ScalarTransform4f().translate([0.0, 0.0, 0.5 * (top + HAZE_BOTTOM_M)]).scale([half_width, half_width, 0.5 * (top - HAZE_BOTTOM_M)]),
+            "to_world": mi.ScalarTransform4f()
+            .translate([0.0, 0.0, 0.5 * (top + HAZE_BOTTOM_M)])
+            .scale([half_width, half_width, 0.5 * (top - HAZE_BOTTOM_M)]),
             "bsdf": {"type": "null"},
             "interior": {"type": "ref", "id": HAZE_ID},
         },

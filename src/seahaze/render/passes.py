@@ -37,7 +37,8 @@ class GeometryPass:
 
 
 def _seed(base: int, *parts: int) -> int:
-    """A 31-bit render seed derived from the scene seed and the pass, so passes never share noise."""
+    """A 31-bit render seed derived from the scene seed and the pass, so passes never share "
+    "noise."""
     seq = np.random.SeedSequence([base, *parts])
     return int(seq.generate_state(1, dtype=np.uint32)[0] & 0x7FFFFFFF)
 
@@ -104,7 +105,15 @@ def render_clean(loaded: LoadedScene, spp: int, seed: int, albedo: float, g: flo
     return render_radiance(loaded, spp, _seed(seed, 0))
 
 
-def render_reference_level(loaded: LoadedScene, sigma: float, albedo: float, g: float, spp: int, seed: int, level_index: int) -> np.ndarray:
+def render_reference_level(
+    loaded: LoadedScene,
+    sigma: float,
+    albedo: float,
+    g: float,
+    spp: int,
+    seed: int,
+    level_index: int,
+) -> np.ndarray:
     """Hazy radiance by brute-force volumetric path tracing (``volpath``)."""
     loaded.set_haze(sigma, albedo, g)
     return render_radiance(loaded, spp, _seed(seed, 1, level_index))
@@ -112,7 +121,8 @@ def render_reference_level(loaded: LoadedScene, sigma: float, albedo: float, g: 
 
 @dataclass(frozen=True)
 class Airlight:
-    """The horizon airlight of one level (linear RGB radiance) and its Monte Carlo standard error."""
+    """The horizon airlight of one level (linear RGB radiance) and its Monte Carlo standard "
+    "error."""
 
     rgb: np.ndarray
     stderr: np.ndarray
@@ -121,14 +131,26 @@ class Airlight:
 AIRLIGHT_BATCHES = 4
 
 
-def render_airlight(loaded: LoadedScene, sigma: float, albedo: float, g: float, spp: int, seed: int, level_index: int) -> Airlight:
+def render_airlight(
+    loaded: LoadedScene,
+    sigma: float,
+    albedo: float,
+    g: float,
+    spp: int,
+    seed: int,
+    level_index: int,
+) -> Airlight:
     """Mean radiance of a narrow horizontal view in the haze, from independent batches."""
     loaded.set_haze(sigma, albedo, g)
     per_batch = max(1, spp // AIRLIGHT_BATCHES)
-    means = np.stack([
-        render_radiance(loaded, per_batch, _seed(seed, 2, level_index, b), sensor_index=1).reshape(-1, 3).mean(axis=0)
-        for b in range(AIRLIGHT_BATCHES)
-    ])
+    means = np.stack(
+        [
+            render_radiance(loaded, per_batch, _seed(seed, 2, level_index, b), sensor_index=1)
+            .reshape(-1, 3)
+            .mean(axis=0)
+            for b in range(AIRLIGHT_BATCHES)
+        ]
+    )
     return Airlight(means.mean(axis=0), means.std(axis=0, ddof=1) / np.sqrt(AIRLIGHT_BATCHES))
 
 
@@ -153,7 +175,9 @@ def haze_path_length(geometry: GeometryPass, bottom_m: float, top_m: float) -> n
     return np.maximum(stop - start, 0.0)
 
 
-def asm_level(clean: np.ndarray, geometry: GeometryPass, sigma: float, airlight_rgb: np.ndarray, top_m: float) -> np.ndarray:
+def asm_level(
+    clean: np.ndarray, geometry: GeometryPass, sigma: float, airlight_rgb: np.ndarray, top_m: float
+) -> np.ndarray:
     """Hazy radiance by the atmospheric scattering model ``I = J t + A (1 - t)``."""
     length = haze_path_length(geometry, HAZE_BOTTOM_M, top_m)
     t = np.exp(-sigma * length)[..., None]

@@ -18,7 +18,13 @@ from pathlib import Path
 MIN_LLVM_MAJOR = 16
 """Oldest libLLVM accepted; 15 aborts inside drjit, 19 is the version tested here."""
 
-_LLVM_DIRS = ("/usr/lib/x86_64-linux-gnu", "/usr/lib/aarch64-linux-gnu", "/usr/lib64", "/usr/lib", "/usr/local/lib")
+_LLVM_DIRS = (
+    "/usr/lib/x86_64-linux-gnu",
+    "/usr/lib/aarch64-linux-gnu",
+    "/usr/lib64",
+    "/usr/lib",
+    "/usr/local/lib",
+)
 _AUTO_ORDER = ("cuda_ad_rgb", "llvm_ad_rgb", "scalar_rgb")
 _selected: str | None = None
 
@@ -60,7 +66,7 @@ def _try_set(name: str) -> bool:
         return False
     try:
         mi.set_variant(name)
-    except Exception:  # noqa: BLE001 - Mitsuba raises plain exceptions for a missing backend
+    except Exception:
         return False
     return True
 
@@ -80,11 +86,17 @@ def select_variant(requested: str = "auto") -> str:
 
     if requested != "auto":
         if requested.startswith("llvm") and not llvm:
-            raise VariantError(f"variant {requested!r} needs libLLVM >= {MIN_LLVM_MAJOR}; install it with 'apt-get install libllvm19'")
+            raise VariantError(
+                f"variant {requested!r} needs libLLVM >= {MIN_LLVM_MAJOR}; install it with "
+                "'apt-get install libllvm19'"
+            )
         if requested.startswith("cuda") and not _cuda_usable():
             raise VariantError(f"variant {requested!r} needs an NVIDIA GPU and driver; none found")
         if not _try_set(requested):
-            raise VariantError(f"variant {requested!r} is not available; choose one of: auto, {', '.join(mi.variants())}")
+            raise VariantError(
+                f"variant {requested!r} is not available; choose one of: auto, "
+                f"{', '.join(mi.variants())}"
+            )
         _selected = requested
         return requested
     for name in _AUTO_ORDER:
@@ -95,7 +107,8 @@ def select_variant(requested: str = "auto") -> str:
         if _try_set(name):
             if name.startswith("scalar"):
                 warnings.warn(
-                    "seahaze: no GPU and no libLLVM >= 16 found; rendering with the slow scalar_rgb variant "
+                    "seahaze: no GPU and no libLLVM >= 16 found; rendering with the slow "
+                    "scalar_rgb variant "
                     "(install libllvm19 for the fast llvm_ad_rgb variant)",
                     RuntimeWarning,
                     stacklevel=2,
