@@ -75,3 +75,29 @@ def load_flat_scene(spec: SceneSpec, vessels=(), visibilities=(1000.0,)):
     camera = Camera.from_spec(spec.camera)
     geometry = SceneGeometry(flat_sea_mesh(), 0.05, None, list(vessels))
     return build_scene(spec, camera, geometry, list(visibilities)), camera
+
+
+@pytest.fixture(scope="session")
+def dataset(tmp_path_factory):
+    """The default scene rendered once by the CLI at 64×36, 2 spp, levels 300 and 4000 m."""
+    from pathlib import Path
+
+    from seahaze.cli import main
+
+    out = tmp_path_factory.mktemp("ds")
+    scene = Path(__file__).resolve().parents[1] / "scenes" / "default.yaml"
+    args = [
+        "render",
+        str(scene),
+        "--vis",
+        "300,4000",
+        "--res",
+        "64x36",
+        "--spp",
+        "2",
+        "--out",
+        str(out),
+        "--quiet",
+    ]
+    assert main(args) == 0
+    return out

@@ -18,28 +18,6 @@ ROOT = Path(__file__).resolve().parents[1]
 LEVELS = ["v0300", "v4000"]
 
 
-@pytest.fixture(scope="module")
-def dataset(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("ds")
-    code = main(
-        [
-            "render",
-            str(ROOT / "scenes" / "default.yaml"),
-            "--vis",
-            "300,4000",
-            "--res",
-            "64x36",
-            "--spp",
-            "2",
-            "--out",
-            str(out),
-            "--quiet",
-        ]
-    )
-    assert code == 0
-    return out
-
-
 def test_layout_is_complete(dataset):
     for level in ["clean", *LEVELS]:
         image = Image.open(dataset / "images" / level / "default.png")

@@ -6,6 +6,7 @@ Layout (docs/dataset-format.md)::
     OUT/images/clean/<scene>.png       OUT/images/v0300/<scene>.png ...
     OUT/labels/<level>/<scene>.txt     OUT/depth/<scene>.exr
     OUT/exr/<level>/<scene>.exr        OUT/meta/<scene>.json
+    OUT/coco/<level>.json
 
 Every file is written atomically (temporary name, then rename), so an interrupted run never
 leaves a truncated file under its final name. Outputs carry no timestamps: the same config and
@@ -59,6 +60,9 @@ class Layout:
 
     def depth(self, scene: str) -> Path:
         return self.root / "depth" / f"{scene}.exr"
+
+    def coco(self, level: str) -> Path:
+        return self.root / "coco" / f"{level}.json"
 
     def meta(self, scene: str) -> Path:
         return self.root / "meta" / f"{scene}.json"
@@ -125,3 +129,20 @@ def manifest(
         "classes": list(class_names),
         "scenes": scenes,
     }
+
+
+def write_coco(root: Path) -> None:
+    """COCO ground truth per level (``coco/<level>.json``) from the YOLO labels of every scene.
+
+    Built with the same converter the metric evaluates with, so a perfect prediction set scores
+    AP50 = 1 against these files. ``file_name`` is relative to the dataset root.
+    """
+    from .metric.dataset import load_dataset, load_level_truth
+    from .metric.evaluate import build_coco
+
+    data = load_dataset(root)
+    for level in data.levels:
+        truth, _ = build_coco(load_level_truth(data, level), {}, data.names)
+        for image in truth["images"]:
+            image["file_name"] = f"images/{level}/{image['file_name']}.png"
+        write_json(Layout(root).coco(level), truth)

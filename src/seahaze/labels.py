@@ -25,6 +25,8 @@ class Box:
     y1: float
     pixels: int
     """Number of visible pixels of the vessel."""
+    visible_fraction: float = 1.0
+    """Visible pixels over the pixels the vessel would cover with nothing in front of it."""
 
     def yolo(self, width: int, height: int) -> tuple[float, float, float, float]:
         """Normalised ``(cx, cy, w, h)`` for YOLO."""
@@ -37,25 +39,38 @@ class Box:
 
 
 def boxes_from_instances(
-    instance: np.ndarray, class_ids: list[int], min_pixels: int = 1
+    instance: np.ndarray,
+    class_ids: list[int],
+    footprint_px: np.ndarray | None = None,
+    min_box_px: float = 1.0,
+    min_visible_fraction: float = 0.0,
 ) -> list[Box]:
-    """Tight boxes of every vessel visible in an (H, W) instance map (-1 = no vessel)."""
+    """Tight boxes of the vessels visible in an (H, W) instance map (-1 = no vessel).
+
+    A vessel is labelled when its box is at least ``min_box_px`` wide and high and at least
+    ``min_visible_fraction`` of its unoccluded footprint (``footprint_px``, pixels whose ray
+    meets it behind anything) is visible.
+    """
     boxes = []
     for vessel, class_id in enumerate(class_ids):
         rows, cols = np.nonzero(instance == vessel)
-        if len(rows) < min_pixels:
+        if len(rows) == 0:
             continue
-        boxes.append(
-            Box(
-                vessel,
-                class_id,
-                float(cols.min()),
-                float(rows.min()),
-                float(cols.max() + 1),
-                float(rows.max() + 1),
-                len(rows),
-            )
+        total = int(footprint_px[vessel]) if footprint_px is not None else len(rows)
+        fraction = len(rows) / max(total, len(rows))
+        box = Box(
+            vessel,
+            class_id,
+            float(cols.min()),
+            float(rows.min()),
+            float(cols.max() + 1),
+            float(rows.max() + 1),
+            len(rows),
+            fraction,
         )
+        if min(box.x1 - box.x0, box.y1 - box.y0) < min_box_px or fraction < min_visible_fraction:
+            continue
+        boxes.append(box)
     return boxes
 
 

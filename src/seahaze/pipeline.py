@@ -16,7 +16,16 @@ import numpy as np
 
 from . import imaging, labels
 from .camera import Camera
-from .dataset import CLEAN, Layout, data_yaml_text, level_entries, manifest, write_json, write_text
+from .dataset import (
+    CLEAN,
+    Layout,
+    data_yaml_text,
+    level_entries,
+    manifest,
+    write_coco,
+    write_json,
+    write_text,
+)
 from .geometry import SceneGeometry, build_geometry
 from .render import passes
 from .render.mitsuba_scene import build_scene
@@ -55,14 +64,43 @@ class _Timer:
         self.timings[self.key] = time.perf_counter() - self.start
 
 
+HORIZON_SKY_BAND_DEG = 2.0
+"""Sky pixels this close above the horizon define the horizon luminance for contrasts."""
+
+
+def horizon_luminance(
+    radiance: np.ndarray, distance: np.ndarray, elevation: np.ndarray
+) -> float | None:
+    """Median luminance of the sky just above the horizon, or None where none is in view."""
+    band = np.isinf(distance) & (elevation >= 0.0) & (elevation < HORIZON_SKY_BAND_DEG)
+    return float(np.median(imaging.luminance(radiance[band]))) if band.sum() >= 4 else None
+
+
+def apparent_contrasts(
+    radiance: np.ndarray, instance: np.ndarray, n_vessels: int, horizon: float | None
+) -> list[float | None]:
+    """Per vessel ``(L_vessel - L_horizon) / L_horizon`` over its visible pixels (Koschmieder C)."""
+    y = imaging.luminance(radiance)
+    out: list[float | None] = []
+    for vessel in range(n_vessels):
+        mask = instance == vessel
+        ok = horizon is not None and horizon > 0 and mask.any()
+        out.append(float((y[mask].mean() - horizon) / horizon) if ok else None)
+    return out
+
+
 def _vessel_meta(
-    geometry: SceneGeometry, boxes: list[labels.Box], camera: Camera
+    geometry: SceneGeometry,
+    boxes: list[labels.Box],
+    footprint_px: np.ndarray,
+    level_contrasts: dict[str, tuple[float, list[float | None]]],
 ) -> list[dict[str, Any]]:
     by_vessel = {b.vessel: b for b in boxes}
     out = []
     for v in geometry.vessels:
         p = v.placement
         box = by_vessel.get(v.index)
+        distance = float(np.hypot(p.x, p.y))
         out.append(
             {
                 "index": v.index,
@@ -73,10 +111,21 @@ def _vessel_meta(
                 "length_m": v.length_m,
                 "beam_m": v.beam_m,
                 "air_draft_m": v.air_draft_m,
-                "distance_m": float(np.hypot(p.x, p.y)),
+                "distance_m": distance,
                 "bearing_deg": p.bearing_deg,
                 "box_px": None if box is None else [box.x0, box.y0, box.x1, box.y1],
                 "visible_pixels": 0 if box is None else box.pixels,
+                "unoccluded_pixels": int(footprint_px[v.index])
+                if v.index < len(footprint_px)
+                else 0,
+                "visible_fraction": None if box is None else box.visible_fraction,
+                "levels": {
+                    level: {
+                        "apparent_contrast": contrasts[v.index],
+                        "beyond_visibility": distance > visibility,
+                    }
+                    for level, (visibility, contrasts) in level_contrasts.items()
+                },
             }
         )
     return out
@@ -110,7 +159,22 @@ def render_scene(
         if spec.render.exposure == "auto"
         else float(spec.render.exposure)
     )
-    boxes = labels.boxes_from_instances(geo.instance, [v.class_id for v in geometry.vessels])
+    boxes = labels.boxes_from_instances(
+        geo.instance,
+        [v.class_id for v in geometry.vessels],
+        geo.footprint_px,
+        spec.labels.min_box_px,
+        spec.labels.min_visible_fraction,
+    )
+    n_vessels = len(geometry.vessels)
+    level_contrasts: dict[str, tuple[float, list[float | None]]] = {
+        CLEAN: (
+            np.inf,
+            apparent_contrasts(
+                clean, geo.instance, n_vessels, horizon_luminance(clean, geo.distance_m, elevation)
+            ),
+        )
+    }
     label_text = labels.yolo_text(boxes, camera.width, camera.height)
 
     _write_image(layout, CLEAN, name, clean, exposure, spec.render.write_exr)
@@ -140,7 +204,16 @@ def render_scene(
                 radiance = passes.asm_level(clean, geo, sigma, airlight.rgb, haze.top_m)
         _write_image(layout, key, name, radiance, exposure, spec.render.write_exr)
         write_text(layout.label(key, name), label_text)
-        entry: dict[str, Any] = {"name": key, "visibility_m": v, "sigma_per_m": sigma}
+        horizon = horizon_luminance(radiance, geo.distance_m, elevation)
+        if horizon is None and airlight is not None:
+            horizon = float(imaging.luminance(airlight.rgb))
+        level_contrasts[key] = (v, apparent_contrasts(radiance, geo.instance, n_vessels, horizon))
+        entry: dict[str, Any] = {
+            "name": key,
+            "visibility_m": v,
+            "sigma_per_m": sigma,
+            "horizon_luminance": horizon,
+        }
         if airlight is not None:
             entry["airlight_rgb"] = airlight.rgb.tolist()
             entry["airlight_stderr_rgb"] = airlight.stderr.tolist()
@@ -165,7 +238,7 @@ def render_scene(
             "box_half_width_m": loaded.box_half_width_m,
         },
         "levels": level_meta,
-        "vessels": _vessel_meta(geometry, boxes, camera),
+        "vessels": _vessel_meta(geometry, boxes, geo.footprint_px, level_contrasts),
     }
     write_json(layout.meta(name), meta)
     return SceneResult(name, variant, exposure, boxes, timings, meta)
@@ -226,4 +299,5 @@ def render_dataset(
             "resolution": list(spec.camera.resolution),
         }
         write_json(layout.manifest, manifest(config, levels, CLASS_NAMES, scene_status))
+    write_coco(root)
     return results

@@ -334,6 +334,25 @@ class HazeSpec(_Spec):
     )
 
 
+class LabelsSpec(_Spec):
+    """Which vessels get a box."""
+
+    min_box_px: float = Field(
+        2.0,
+        ge=1.0,
+        le=1000.0,
+        description="Smallest box width and height that is labelled.",
+        json_schema_extra=_unit("px"),
+    )
+    min_visible_fraction: float = Field(
+        0.1,
+        ge=0.0,
+        le=1.0,
+        description="Smallest visible share of a vessel's unoccluded pixels that is labelled.",
+        json_schema_extra=_unit("1"),
+    )
+
+
 class RenderSpec(_Spec):
     """How the scene is rendered."""
 
@@ -395,6 +414,7 @@ class SceneSpec(_Spec):
     sea: SeaSpec = Field(default_factory=SeaSpec)
     vessels: VesselsSpec = Field(default_factory=VesselsSpec)
     haze: HazeSpec = Field(default_factory=HazeSpec)
+    labels: LabelsSpec = Field(default_factory=LabelsSpec)
     render: RenderSpec = Field(default_factory=RenderSpec)
 
 

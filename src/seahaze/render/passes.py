@@ -18,8 +18,8 @@ import numpy as np
 
 from .mitsuba_scene import HAZE_BOTTOM_M, LoadedScene
 
-GEOMETRY_MAX_NULL_CROSSINGS = 4
-"""The haze box is convex, so a camera ray crosses its null surface at most twice."""
+GEOMETRY_MAX_CROSSINGS = 16
+"""Surfaces a pixel ray walks through: the haze box (twice at most) and vessels behind vessels."""
 
 
 @dataclass
@@ -34,6 +34,8 @@ class GeometryPass:
     """(H, W, 3) float32 unit ray directions in the world frame."""
     origin: np.ndarray
     """(3,) camera position (m)."""
+    footprint_px: np.ndarray | None = None
+    """Per vessel, the pixels whose ray meets it anywhere before the sea: its unoccluded size."""
 
 
 def _seed(base: int, *parts: int) -> int:
@@ -62,32 +64,45 @@ def render_geometry(loaded: LoadedScene) -> GeometryPass:
     origin = cam.origin
     directions = np.stack([np.array(ray.d.x), np.array(ray.d.y), np.array(ray.d.z)], axis=-1)
 
-    box_id = next(k for k, v in loaded.shape_ids.items() if v == -2)
-    hit_point = np.full((width * height, 3), np.nan)
-    shape = np.zeros(width * height, dtype=np.int64)
-    active = np.ones(width * height, dtype=bool)
+    # Map Mitsuba shape ids to vessel indices (-1 sea, -2 haze box) with a sorted lookup table.
+    keys = np.array(sorted(loaded.shape_ids), dtype=np.int64)
+    values = np.array([loaded.shape_ids[k] for k in keys], dtype=np.int32)
+    n = width * height
+    pixel = np.arange(n)
+    hit_point = np.full((n, 3), np.nan)
+    first = np.full(n, -1, dtype=np.int32)
+    pending = np.ones(n, dtype=bool)  # first surface not found yet
+    tracing = np.ones(n, dtype=bool)  # still walking through the box and vessels
+    footprint: list[np.ndarray] = []
     current = mi.Ray3f(ray)
-    for _ in range(GEOMETRY_MAX_NULL_CROSSINGS):
+    for _ in range(GEOMETRY_MAX_CROSSINGS):
         si = loaded.scene.ray_intersect(current)
         valid = np.array(si.is_valid())
         sid = np.array(dr.reinterpret_array(mi.UInt32, si.shape)).astype(np.int64)
+        owner = np.where(valid, values[np.clip(np.searchsorted(keys, sid), 0, len(keys) - 1)], -3)
         p = np.stack([np.array(si.p.x), np.array(si.p.y), np.array(si.p.z)], axis=-1)
-        done = active & (~valid | (sid != box_id))
-        hit_point[done & valid] = p[done & valid]
-        shape[done & valid] = sid[done & valid]
-        active &= ~done
-        if not active.any():
+        found = pending & valid & (owner != -2)
+        hit_point[found] = p[found]
+        first[found] = owner[found]
+        pending &= valid & (owner == -2)
+        behind = tracing & (owner >= 0)
+        footprint.append(pixel[behind] * len(values) + owner[behind])
+        # Keep walking through the haze box and vessels; stop at the sea or the sky.
+        tracing &= valid & ((owner == -2) | (owner >= 0))
+        if not tracing.any():
             break
         current = si.spawn_ray(current.d)
     distance = np.linalg.norm(hit_point - origin, axis=-1)
     distance = np.where(np.isfinite(distance), distance, np.inf).astype(np.float32)
-    lookup = np.vectorize(lambda s: loaded.shape_ids.get(int(s), -1), otypes=[np.int32])
-    instance = np.where(np.isfinite(distance), lookup(shape), -1).astype(np.int32)
+    pairs = np.unique(np.concatenate(footprint)) if footprint else np.zeros(0, np.int64)
+    n_vessels = int(values.max()) + 1 if values.size else 0
+    footprint_px = np.bincount(pairs % len(values), minlength=n_vessels)[:n_vessels]
     return GeometryPass(
         distance.reshape(height, width),
-        instance.reshape(height, width),
+        np.where(first >= 0, first, -1).astype(np.int32).reshape(height, width),
         directions.reshape(height, width, 3).astype(np.float32),
         origin,
+        footprint_px.astype(np.int64),
     )
 
 
