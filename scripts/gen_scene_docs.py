@@ -32,6 +32,24 @@ Example (`scenes/default.yaml`):
 ```yaml
 {example}
 ```
+
+Vessels, explicit and sampled (they can be combined; sampled ones never overlap the explicit
+ones). `seahaze classes` lists the classes with their YOLO ids and length ranges:
+
+```yaml
+vessels:
+  placed:                       # bearing: from the camera heading, positive to the left
+    - {{class: tug, distance_m: 420, bearing_deg: 12, heading_deg: 200, length_m: 30}}
+    - {{class: tanker, distance_m: 2600, bearing_deg: -20, heading_deg: 10}}  # length sampled
+  sample:
+    count: 6
+    classes: {{container_ship: 2, fishing_boat: 3, buoy: 1}}   # relative weights
+    distance_m: [150, 4000]
+    distribution: log           # as many vessels per octave of distance
+    bearing_spread_deg: 25      # half-width; default: inside the field of view
+    min_separation_m: 40
+    seed: 3
+```
 """
 
 
