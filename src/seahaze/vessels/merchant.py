@@ -326,10 +326,16 @@ def _add_container_stacks(
         )
 
 
-def build_bulk_carrier(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
-    """Bulk carrier: bluff hull, aft accommodation + funnel, a row of raised hatch covers and,
-    on geared Handysize/Supramax ships, four deck cranes between the hatches."""
-    form = _merchant_hull(d, rng, fullness=1.0)
+def _cargo_hull_with_aft_house(
+    d: PrincipalDims, rng: np.random.Generator, fullness: float, metres_per_deck: float
+) -> tuple[PartSet, HullForm, float, tuple[Material, Material, Material]]:
+    """The shared start of bulk carriers and tankers: painted cargo hull and aft house.
+
+    Returns the parts so far, the hull form, the x of the house front and the
+    (hull, superstructure, deck) paints; one house deck per ``metres_per_deck`` of length
+    on top of three, 4 to 8 decks in all.
+    """
+    form = _merchant_hull(d, rng, fullness=fullness)
     hull = pick_material(HULL_PAINTS_CARGO, rng)
     white = pick_material(SUPERSTRUCTURE_WHITES, rng)
     deck = pick_material(DECK_PAINTS, rng)
@@ -337,7 +343,7 @@ def build_bulk_carrier(d: PrincipalDims, rng: np.random.Generator) -> list[Vesse
     parts.add_hull(
         form, hull, bottom=pick_material(ANTIFOULING_REDS, rng), boot_top_z=_boot_top(d), deck=deck
     )
-    n_decks = int(np.clip(round(3 + d.length / 90.0 + rng.integers(0, 2)), 4, 8))
+    n_decks = int(np.clip(round(3 + d.length / metres_per_deck + rng.integers(0, 2)), 4, 8))
     _, x_house_fwd, _ = _aft_house(
         parts,
         form,
@@ -346,6 +352,15 @@ def build_bulk_carrier(d: PrincipalDims, rng: np.random.Generator) -> list[Vesse
         paint=white,
         funnel=pick_material(FUNNEL_PAINTS, rng),
         soot=FUNNEL_PAINTS[0],
+    )
+    return parts, form, x_house_fwd, (hull, white, deck)
+
+
+def build_bulk_carrier(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
+    """Bulk carrier: bluff hull, aft accommodation + funnel, a row of raised hatch covers and,
+    on geared Handysize/Supramax ships, four deck cranes between the hatches."""
+    parts, form, x_house_fwd, (hull, white, deck) = _cargo_hull_with_aft_house(
+        d, rng, fullness=1.0, metres_per_deck=90.0
     )
 
     length, beam = d.length, d.beam
@@ -395,23 +410,8 @@ def build_bulk_carrier(d: PrincipalDims, rng: np.random.Generator) -> list[Vesse
 def build_tanker(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
     """Oil/product tanker: long low flush deck, aft house + funnel, centreline pipe rack and
     catwalk, manifold cranes amidships."""
-    form = _merchant_hull(d, rng, fullness=0.7)
-    hull = pick_material(HULL_PAINTS_CARGO, rng)
-    white = pick_material(SUPERSTRUCTURE_WHITES, rng)
-    deck = pick_material(DECK_PAINTS, rng)
-    parts = PartSet()
-    parts.add_hull(
-        form, hull, bottom=pick_material(ANTIFOULING_REDS, rng), boot_top_z=_boot_top(d), deck=deck
-    )
-    n_decks = int(np.clip(round(3 + d.length / 80.0 + rng.integers(0, 2)), 4, 8))
-    _, x_house_fwd, _ = _aft_house(
-        parts,
-        form,
-        rng,
-        n_decks=n_decks,
-        paint=white,
-        funnel=pick_material(FUNNEL_PAINTS, rng),
-        soot=FUNNEL_PAINTS[0],
+    parts, form, x_house_fwd, (_hull, white, deck) = _cargo_hull_with_aft_house(
+        d, rng, fullness=0.7, metres_per_deck=80.0
     )
     length, beam = d.length, d.beam
     x0 = x_house_fwd + 1.0
