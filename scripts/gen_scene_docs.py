@@ -13,7 +13,7 @@ from typing import Any
 from pydantic import BaseModel
 from pydantic_core import PydanticUndefined
 
-from seahaze.spec import SceneSpec
+from seahaze.spec import SceneSpec, field_bounds, model_in
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "scenes.md"
 
@@ -53,16 +53,6 @@ vessels:
 """
 
 
-def _model_of(annotation: Any) -> type[BaseModel] | None:
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    for arg in getattr(annotation, "__args__", ()):
-        found = _model_of(arg)
-        if found is not None:
-            return found
-    return None
-
-
 def _type_name(annotation: Any) -> str:
     text = getattr(annotation, "__name__", None) if isinstance(annotation, type) else None
     text = text or str(annotation)
@@ -90,13 +80,8 @@ def _type_name(annotation: Any) -> str:
 
 
 def _range(info) -> str:
-    parts = []
-    for meta in info.metadata:
-        for attr, sym in (("ge", "≥"), ("gt", ">"), ("le", "≤"), ("lt", "<")):
-            value = getattr(meta, attr, None)
-            if value is not None:
-                parts.append(f"{sym} {value:g}")
-    return ", ".join(parts)
+    symbols = {"ge": "≥", "gt": ">", "le": "≤", "lt": "<"}
+    return ", ".join(f"{symbols[kind]} {value:g}" for kind, value in field_bounds(info))
 
 
 def _default(info) -> str:
@@ -126,7 +111,7 @@ def section(model: type[BaseModel], path: str) -> list[str]:
     nested = []
     for name, info in model.model_fields.items():
         key = info.alias or name
-        sub = _model_of(info.annotation)
+        sub = model_in(info.annotation)
         extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
         unit = extra.get("unit", "")
         kind = f"section `{sub.__name__}`" if sub else _type_name(info.annotation)

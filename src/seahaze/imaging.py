@@ -11,6 +11,8 @@ function is IEC 61966-2-1 via colour-science. EXR files hold the linear radiance
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -47,34 +49,39 @@ def to_srgb8(radiance: np.ndarray, exposure: float) -> np.ndarray:
     return np.round(encoded * 255.0).astype(np.uint8)
 
 
-def _atomic_target(path: Path) -> Path:
+@contextmanager
+def atomic_target(path: Path) -> Iterator[Path]:
+    """A temporary path beside ``path`` to write to; renamed onto ``path`` when the block ends.
+
+    An interrupted or failed write leaves no truncated file under the final name.
+    """
     path.parent.mkdir(parents=True, exist_ok=True)
-    return path.with_name(f".{path.name}.tmp{os.getpid()}")
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
 
 
 def write_png(path: str | Path, image8: np.ndarray) -> None:
     """Write an 8-bit RGB PNG atomically (temporary file, then rename)."""
     from PIL import Image
 
-    path = Path(path)
-    tmp = _atomic_target(path)
-    Image.fromarray(image8, mode="RGB").save(tmp, format="PNG")
-    os.replace(tmp, path)
+    with atomic_target(Path(path)) as tmp:
+        Image.fromarray(image8, mode="RGB").save(tmp, format="PNG")
 
 
 def write_exr(path: str | Path, channels: dict[str, np.ndarray]) -> None:
     """Write float32 channels (each (H, W)) to an OpenEXR file atomically, ZIP-compressed."""
     import OpenEXR
 
-    path = Path(path)
-    tmp = _atomic_target(path)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     data = {
         name: np.ascontiguousarray(values, dtype=np.float32) for name, values in channels.items()
     }
-    with OpenEXR.File(header, data) as exr:
+    with atomic_target(Path(path)) as tmp, OpenEXR.File(header, data) as exr:
         exr.write(str(tmp))
-    os.replace(tmp, path)
 
 
 def write_rgb_exr(path: str | Path, radiance: np.ndarray) -> None:

@@ -14,7 +14,7 @@ from typing import Any
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from .spec import SceneSpec
+from .spec import SceneSpec, field_bounds, model_in
 
 Loc = tuple[str | int, ...]
 
@@ -82,19 +82,8 @@ def _field_info(loc: Loc):
             return None
         info = fields[name]
         annotation = info.annotation
-        model = _model_in(annotation)
+        model = model_in(annotation)
     return info
-
-
-def _model_in(annotation: Any) -> type[BaseModel] | None:
-    """The BaseModel class inside an annotation such as ``Model | None`` or ``list[Model]``."""
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    for arg in getattr(annotation, "__args__", ()):
-        found = _model_in(arg)
-        if found is not None:
-            return found
-    return None
 
 
 def _allowed(loc: Loc) -> str:
@@ -102,14 +91,13 @@ def _allowed(loc: Loc) -> str:
     info = _field_info(loc)
     if info is None:
         return ""
-    bounds = []
-    for meta in info.metadata:
-        for attr, sym in (("ge", ">="), ("gt", ">"), ("le", "<="), ("lt", "<")):
-            value = getattr(meta, attr, None)
-            if value is not None:
-                bounds.append(
-                    f"{sym} {value:g}" if isinstance(value, float | int) else f"{sym} {value}"
-                )
+    symbols = {"ge": ">=", "gt": ">", "le": "<=", "lt": "<"}
+    bounds = [
+        f"{symbols[kind]} {value:g}"
+        if isinstance(value, float | int)
+        else f"{symbols[kind]} {value}"
+        for kind, value in field_bounds(info)
+    ]
     extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
     unit = extra.get("unit")
     parts = []
@@ -130,7 +118,7 @@ def _dotted(loc: Loc) -> str:
 def _allowed_keys(loc: Loc) -> str:
     """For an unknown key: the keys its section does allow."""
     parent = (
-        _model_in(_field_info(loc[:-1]).annotation)
+        model_in(_field_info(loc[:-1]).annotation)
         if len(loc) > 1 and _field_info(loc[:-1])
         else SceneSpec
     )

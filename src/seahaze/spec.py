@@ -8,11 +8,36 @@ Azimuths and headings are measured counter-clockwise from +x when seen from abov
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic.fields import FieldInfo
 
 from .visibility import GRADED_LEVELS_M, Threshold
+
+BOUND_KINDS = ("ge", "gt", "le", "lt")
+"""The numeric constraints a field may carry, as pydantic names them."""
+
+
+def model_in(annotation: Any) -> type[BaseModel] | None:
+    """The spec model inside an annotation such as ``Model | None`` or ``list[Model]``."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in getattr(annotation, "__args__", ()):
+        found = model_in(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def field_bounds(info: FieldInfo) -> list[tuple[str, Any]]:
+    """The ``(kind, value)`` numeric bounds of a field, kind one of :data:`BOUND_KINDS`."""
+    return [
+        (kind, getattr(meta, kind))
+        for meta in info.metadata
+        for kind in BOUND_KINDS
+        if getattr(meta, kind, None) is not None
+    ]
 
 
 def _unit(unit: str) -> dict[str, str]:
