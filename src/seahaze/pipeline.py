@@ -186,22 +186,10 @@ def render_scene(
         sigma = extinction_coefficient(v, haze.threshold)
         key = level_name(v)
         with _Timer(timings, f"level_{key}"):
-            if spec.render.mode == "reference":
-                radiance = passes.render_reference_level(
-                    loaded, sigma, haze.albedo, haze.g, spec.render.spp, spec.render.seed, i
-                )
-                airlight = None
-            else:
-                airlight = passes.render_airlight(
-                    loaded,
-                    sigma,
-                    haze.albedo,
-                    haze.g,
-                    spec.render.airlight_spp,
-                    spec.render.seed,
-                    i,
-                )
-                radiance = passes.asm_level(clean, geo, sigma, airlight.rgb, haze.top_m)
+            level = passes.render_level(
+                spec.render.mode, loaded, geo, clean, sigma, haze, spec.render, i
+            )
+        radiance, airlight = level.radiance, level.airlight
         _write_image(layout, key, name, radiance, exposure, spec.render.write_exr)
         write_text(layout.label(key, name), label_text)
         horizon = horizon_luminance(radiance, geo.distance_m, elevation)

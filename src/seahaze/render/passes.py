@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..spec import HazeSpec, RenderSpec
 from .mitsuba_scene import HAZE_BOTTOM_M, LoadedScene
 
 GEOMETRY_MAX_CROSSINGS = 16
@@ -197,3 +198,41 @@ def asm_level(
     length = haze_path_length(geometry, HAZE_BOTTOM_M, top_m)
     t = np.exp(-sigma * length)[..., None]
     return (clean * t + airlight_rgb[None, None, :] * (1.0 - t)).astype(np.float32)
+
+
+@dataclass
+class LevelRender:
+    """One hazy level's linear radiance and what the mode measured on the way."""
+
+    radiance: np.ndarray
+    """(H, W, 3) float32 linear RGB radiance."""
+    airlight: Airlight | None = None
+    """The horizon airlight (``asm`` only)."""
+
+
+def render_level(
+    mode: str,
+    loaded: LoadedScene,
+    geometry: GeometryPass,
+    clean: np.ndarray,
+    sigma: float,
+    haze: HazeSpec,
+    render: RenderSpec,
+    level_index: int,
+) -> LevelRender:
+    """Render one hazy level of extinction ``sigma`` (1/m) in ``mode`` (``reference``/``asm``).
+
+    The single entry point for every caller (pipeline, verify, benchmarks), so a mode behaves
+    the same everywhere. ``clean`` and ``geometry`` are the scene's clean and geometry passes.
+    """
+    if mode == "reference":
+        radiance = render_reference_level(
+            loaded, sigma, haze.albedo, haze.g, render.spp, render.seed, level_index
+        )
+        return LevelRender(radiance)
+    if mode == "asm":
+        airlight = render_airlight(
+            loaded, sigma, haze.albedo, haze.g, render.airlight_spp, render.seed, level_index
+        )
+        return LevelRender(asm_level(clean, geometry, sigma, airlight.rgb, haze.top_m), airlight)
+    raise ValueError(f"unknown render mode {mode!r}; allowed: reference, asm")
