@@ -121,6 +121,25 @@ def _vessel_bsdf(rgb: tuple[float, float, float], roughness: float) -> dict:
     }
 
 
+BLACK_BSDF: dict = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
+"""A perfectly black surface (reflects nothing). Painted steel with a zero paint colour is not
+black: its varnish still reflects the sky specularly; the ``seahaze verify`` targets need zero."""
+
+
+def sunsky_dict(spec: SceneSpec, sun: bool = True, sky: bool = True) -> dict:
+    """The Hosek–Wilkie ``sunsky`` emitter of ``spec``; ``sun``/``sky`` False switch a part off
+    (the ``physical`` mode samples the sun on its own)."""
+    direction = sun_direction(spec.sun.elevation_deg, spec.sun.azimuth_deg)
+    return {
+        "type": "sunsky",
+        "sun_direction": direction.tolist(),
+        "turbidity": spec.sky.turbidity,
+        "albedo": spec.sky.ground_albedo,
+        "sun_scale": spec.sun.scale if sun else 0.0,
+        "sky_scale": spec.sky.scale if sky else 0.0,
+    }
+
+
 @dataclass
 class LoadedScene:
     """A Mitsuba scene plus the handles the render passes need."""
@@ -136,6 +155,10 @@ class LoadedScene:
 
     def set_haze(self, sigma_t: float, albedo: float, g: float) -> None:
         """Change the medium in place (no reload, no recompilation)."""
+        if f"{HAZE_ID}.sigma_t.value.value" not in self.params:
+            if sigma_t > 0.0:
+                raise ValueError("this scene was loaded without a haze box (haze_box=False)")
+            return
         self.params[f"{HAZE_ID}.sigma_t.value.value"] = sigma_t
         self.params[f"{HAZE_ID}.albedo.value.value"] = albedo
         self.params[f"{HAZE_ID}.phase_function.g"] = g
@@ -152,14 +175,25 @@ def shape_registry_id(shape: Any) -> int:
 
 
 def build_scene(
-    spec: SceneSpec, camera: Camera, geometry: SceneGeometry, visibilities_m: list[float]
+    spec: SceneSpec,
+    camera: Camera,
+    geometry: SceneGeometry,
+    visibilities_m: list[float],
+    *,
+    black_vessels: bool = False,
+    haze_box: bool = True,
 ) -> LoadedScene:
-    """Load the Mitsuba scene for ``spec`` with a haze box wide enough for ``visibilities_m``."""
+    """Load the Mitsuba scene for ``spec`` with a haze box wide enough for ``visibilities_m``.
+
+    ``black_vessels`` gives every vessel part :data:`BLACK_BSDF` instead of painted steel (the
+    black calibration targets of ``seahaze verify``). ``haze_box=False`` leaves the Mitsuba
+    medium out: the ``physical`` mode computes the haze analytically in its own integrator and
+    needs only the surfaces, sun and sky.
+    """
     mi = _mi()
     top = spec.haze.top_m
     half_width = haze_box_half_width(visibilities_m or [1.0e4], spec.haze.threshold)
-    inside = camera.height_m < top
-    sun = sun_direction(spec.sun.elevation_deg, spec.sun.azimuth_deg)
+    inside = camera.height_m < top and haze_box
     scene: dict[str, Any] = {
         "type": "scene",
         "integrator": {"type": "volpath", "max_depth": spec.render.max_depth, "rr_depth": 8},
@@ -175,14 +209,7 @@ def build_scene(
         "sensor_airlight": _sensor_dict(
             camera, AIRLIGHT_RES, AIRLIGHT_RES, AIRLIGHT_FOV_DEG, 0.0, inside
         ),
-        "sky": {
-            "type": "sunsky",
-            "sun_direction": sun.tolist(),
-            "turbidity": spec.sky.turbidity,
-            "albedo": spec.sky.ground_albedo,
-            "sun_scale": spec.sun.scale,
-            "sky_scale": spec.sky.scale,
-        },
+        "sky": sunsky_dict(spec),
         HAZE_BOX_ID: {
             "type": "cube",
             "to_world": mi.ScalarTransform4f()
@@ -193,9 +220,12 @@ def build_scene(
         },
         "sea": _mesh(geometry.sea, _sea_bsdf(spec, geometry.sea_roughness)),
     }
+    if not haze_box:
+        del scene[HAZE_BOX_ID], scene[HAZE_ID]
     for vessel in geometry.vessels:
         for part in vessel.parts:
-            scene[part.name] = _mesh(part, _vessel_bsdf(part.rgb, part.roughness))
+            bsdf = BLACK_BSDF if black_vessels else _vessel_bsdf(part.rgb, part.roughness)
+            scene[part.name] = _mesh(part, bsdf)
     loaded = mi.load_dict(scene)
     params = mi.traverse(loaded)
     shape_ids: dict[int, int] = {}
