@@ -6,6 +6,7 @@ is up to date, so the reference cannot drift from the code.
 
 from __future__ import annotations
 
+import inspect
 import sys
 from pathlib import Path
 from typing import Any
@@ -50,6 +51,27 @@ vessels:
     min_separation_m: 40
     seed: 3
 ```
+
+A vessel from your own mesh file, and hulls that pitch and roll with the waves. The mesh keeps
+its own materials; the placed vessel's `class` gives its boxes their YOLO id. A missing,
+unreadable or unsupported file is reported with its line like any other mistake. The
+conventions (axes, scale, draft) are in `assets/README.md`:
+
+```yaml
+vessels:
+  follow_slope: true                # pitch and roll to the local sea slope (default: upright)
+  placed:
+    - class: fishing_boat           # what the mesh is labelled as
+      distance_m: 250
+      bearing_deg: 5
+      heading_deg: 120
+      mesh:
+        path: meshes/workboat.ply   # absolute, relative to this YAML file, or to assets/
+        scale_m: 16                 # overall length after scaling (m), not a factor
+        up_axis: "+y"               # the file's up and bow axes (glTF exports: +y up)
+        forward_axis: "+z"
+        draft_m: 0.9                # default: 10 % of the scaled height
+```
 """
 
 
@@ -76,7 +98,9 @@ def _type_name(annotation: Any) -> str:
         return "list of numbers"
     if "tuple[" in text and "int" in text:
         return "list of integers"
-    return text.split(",")[0].replace("[", "") if "Field" in text else text
+    text = text.split(",")[0].replace("[", "") if "Field" in text else text
+    # A bare "|" would split the Markdown table cell.
+    return text.replace(" | None", " or null").replace(" | ", " or ")
 
 
 def _range(info) -> str:
@@ -103,7 +127,7 @@ def section(model: type[BaseModel], path: str) -> list[str]:
     lines = [
         f"## `{path}`" if path else "## Top level",
         "",
-        (model.__doc__ or "").strip(),
+        inspect.cleandoc(model.__doc__ or ""),
         "",
         "| key | type | unit | default | allowed | meaning |",
         "|---|---|---|---|---|---|",

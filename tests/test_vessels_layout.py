@@ -125,6 +125,26 @@ def test_explicit_rejects_unknown_kind_and_bad_length() -> None:
         place_explicit([ExplicitVessel("tug", 100.0, 0.0, 0.0, 80.0)], 0.0, rng)
 
 
+def test_user_mesh_footprint_uses_its_own_beam_and_length() -> None:
+    # Two vessels heading along +x, 20 m apart across: a library tug (L 30, largest beam
+    # 0.5 L = 15 m) at y = 0 and a user mesh at y = +20 with a given beam. Their rectangles
+    # touch when 15/2 + beam/2 >= 20, i.e. for a beam of 25 m or more.
+    lateral = np.degrees(np.arctan2(20.0, 1000.0))
+    distance = float(np.hypot(1000.0, 20.0))
+    tug = ExplicitVessel("tug", 1000.0, 0.0, 0.0, 30.0)
+    rng = np.random.default_rng(0)
+    narrow = ExplicitVessel("tug", distance, lateral, 0.0, 80.0, beam_m=20.0)
+    placements = place_explicit([tug, narrow], 0.0, rng)  # 80 m: outside the tug range, allowed
+    assert placements[1].beam_m == 20.0 and placements[1].length_m == 80.0
+    corners = footprint_corners(placements[1])
+    assert np.ptp(corners[:, 1]) == pytest.approx(20.0) and np.ptp(corners[:, 0]) == 80.0
+    wide = ExplicitVessel("tug", distance, lateral, 0.0, 80.0, beam_m=26.0)
+    with pytest.raises(LayoutError, match="overlap"):
+        place_explicit([tug, wide], 0.0, rng)
+    with pytest.raises(ValueError, match="needs its length_m"):
+        place_explicit([ExplicitVessel("tug", 500.0, 0.0, 0.0, beam_m=5.0)], 0.0, rng)
+
+
 # ----------------------------------------------------------------------------- sampler
 def _sample(seed: int, **overrides) -> list[Placement]:
     args = dict(

@@ -2,7 +2,8 @@
 
 This is the step between the spec and the renderer: plain numpy meshes and materials, no
 Mitsuba. Seeds for the sea and the layout derive from ``render.seed`` unless the spec gives its
-own, so one master seed reproduces a whole scene.
+own, so one master seed reproduces a whole scene. Explicit vessels with a ``mesh`` are loaded
+from the user's file (``sceneio`` has already resolved and checked the path of a scene file).
 """
 
 from __future__ import annotations
@@ -96,14 +97,54 @@ def build_sea(spec: SceneSpec, camera: Camera) -> tuple[MeshData, float, ocean.O
     return MeshData("sea", vertices, faces, spec.sea.water_color, roughness), roughness, surface
 
 
-def layout_vessels(spec: SceneSpec, camera: Camera) -> list[vessels.Placement]:
-    """Where the vessels go: explicit ones first, then sampled ones (never overlapping)."""
+def load_user_meshes(spec: SceneSpec) -> dict[int, vessels.VesselModel]:
+    """The user meshes of the explicit vessels, by index in ``spec.vessels.placed``.
+
+    Relative paths are looked up in the working directory, then the repository's ``assets/``
+    (a scene read by :func:`seahaze.sceneio.load_scene` holds absolute paths already). Raises
+    FileNotFoundError or ValueError (from :func:`seahaze.vessels.load_user_mesh`).
+    """
+    models = {}
+    for index, placed in enumerate(spec.vessels.placed):
+        mesh = placed.mesh
+        if mesh is None:
+            continue
+        path = vessels.resolve_mesh_path(mesh.path, vessels.mesh_search_dirs())
+        if path is None:
+            raise FileNotFoundError(f"user mesh not found: {mesh.path}")
+        models[index] = vessels.load_user_mesh(
+            path,
+            placed.kind,
+            mesh.scale_m,
+            mesh.up_axis,
+            mesh.forward_axis,
+            draft_m=mesh.draft_m,
+        )
+    return models
+
+
+def layout_vessels(
+    spec: SceneSpec, camera: Camera, user_models: dict[int, vessels.VesselModel] | None = None
+) -> list[vessels.Placement]:
+    """Where the vessels go: explicit ones first, then sampled ones (never overlapping).
+
+    ``user_models`` (from :func:`load_user_meshes`) give the explicit user-mesh vessels their
+    real length and beam, so their footprints are right.
+    """
+    user_models = load_user_meshes(spec) if user_models is None else user_models
     rng = np.random.default_rng(derived_seed(spec.render.seed, LAYOUT_SEED_STREAM))
-    placements = (
-        vessels.place_explicit(spec.vessels.placed, camera.heading_deg, rng)
-        if spec.vessels.placed
-        else []
-    )
+    items = [
+        vessels.ExplicitVessel(
+            p.kind,
+            p.distance_m,
+            p.bearing_deg,
+            p.heading_deg,
+            user_models[i].length_m if i in user_models else p.length_m,
+            user_models[i].beam_m if i in user_models else None,
+        )
+        for i, p in enumerate(spec.vessels.placed)
+    ]
+    placements = vessels.place_explicit(items, camera.heading_deg, rng) if items else []
     sampler = spec.vessels.sample
     if sampler is not None and sampler.count > 0:
         rng = np.random.default_rng(
@@ -134,12 +175,23 @@ def layout_vessels(spec: SceneSpec, camera: Camera) -> list[vessels.Placement]:
 def build_vessels(
     spec: SceneSpec, camera: Camera, surface: ocean.OceanSurface
 ) -> list[VesselInstance]:
-    """Vessel meshes placed on the sea; each vessel's waterline follows the surface height."""
+    """Vessel meshes placed on the sea; each vessel's waterline follows the surface height.
+
+    With ``vessels.follow_slope`` each hull also pitches and rolls to the sea slope between its
+    bow and stern and between its sides (finite differences of the surface height), so a ship
+    longer than the waves bridges them instead of following every ripple.
+    """
+    user_models = load_user_meshes(spec)
     rng = np.random.default_rng(derived_seed(spec.render.seed, VESSEL_SEED_STREAM))
     instances = []
-    for index, placement in enumerate(layout_vessels(spec, camera)):
-        model = vessels.build_vessel(placement.kind, placement.length_m, rng)
-        parts = vessels.place_on_sea(model, placement, surface.height)
+    for index, placement in enumerate(layout_vessels(spec, camera, user_models)):
+        # Explicit vessels come first in the layout, so index i < len(placed) is placed[i].
+        model = user_models.get(index)
+        if model is None:
+            model = vessels.build_vessel(placement.kind, placement.length_m, rng)
+        parts = vessels.place_on_sea(
+            model, placement, surface.height, follow_slope=spec.vessels.follow_slope
+        )
         waterline = float(surface.height(np.array([placement.x]), np.array([placement.y]))[0])
         meshes = [
             MeshData(

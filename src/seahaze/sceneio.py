@@ -2,6 +2,8 @@
 
 Every problem is reported at once, each with ``file:line``, the dotted field and what is
 allowed, so a user fixes a file in one pass. Unknown keys and duplicate keys are errors.
+User mesh files named by the scene are found, read and checked here too, and their paths made
+absolute in the returned spec, so a bad file is a located message, never a traceback later.
 """
 
 from __future__ import annotations
@@ -171,8 +173,14 @@ def _reject_non_finite(data: Any, loc: Loc, lines: dict[Loc, int], file: str) ->
     return []
 
 
-def parse_scene_text(text: str, file: str = "<scene>") -> SceneSpec:
-    """Validate YAML text into a SceneSpec; raises :class:`SceneFileError` listing every problem."""
+def parse_scene_text(
+    text: str, file: str = "<scene>", base_dir: str | Path | None = None
+) -> SceneSpec:
+    """Validate YAML text into a SceneSpec; raises :class:`SceneFileError` listing every problem.
+
+    Relative user-mesh paths are looked up in ``base_dir`` (the scene file's folder; default the
+    working directory), then in the repository's ``assets/``.
+    """
     try:
         node = yaml.compose(text, Loader=yaml.SafeLoader)
         data = yaml.safe_load(text)
@@ -203,6 +211,8 @@ def parse_scene_text(text: str, file: str = "<scene>") -> SceneSpec:
         spec = None
     if spec is not None:
         problems += _check_vessel_classes(spec, file, lines)
+        mesh_problems, spec = _resolve_user_meshes(spec, file, lines, base_dir)
+        problems += mesh_problems
     if problems:
         raise SceneFileError(sorted(problems, key=lambda p: p.line))
     assert spec is not None
@@ -254,6 +264,77 @@ def _check_vessel_classes(spec: SceneSpec, file: str, lines: dict[Loc, int]) -> 
     return problems
 
 
+def _resolve_user_meshes(
+    spec: SceneSpec, file: str, lines: dict[Loc, int], base_dir: str | Path | None
+) -> tuple[list[Problem], SceneSpec]:
+    """Find, read and check every user mesh; the spec with their absolute paths.
+
+    The mesh is loaded once here (small files load in milliseconds) because only reading it
+    tells a truncated or wrong-content file from a good one.
+    """
+    from .vessels import (
+        CLASS_NAMES,
+        SUPPORTED_FORMATS,
+        load_user_mesh,
+        mesh_search_dirs,
+        resolve_mesh_path,
+    )
+
+    search = mesh_search_dirs(base_dir)
+    allowed = ", ".join(SUPPORTED_FORMATS)
+    problems = []
+    placed = list(spec.vessels.placed)
+    for i, vessel in enumerate(placed):
+        mesh = vessel.mesh
+        if mesh is None:
+            continue
+        loc: Loc = ("vessels", "placed", i, "mesh", "path")
+
+        def problem(message: str, loc: Loc = loc) -> Problem:
+            return Problem(file, _line_for(loc, lines), _dotted(loc), message)
+
+        suffix = Path(mesh.path).suffix.lower()
+        if suffix not in SUPPORTED_FORMATS:
+            problems.append(
+                problem(f"unsupported mesh format '{suffix or mesh.path}'; allowed: {allowed}")
+            )
+            continue
+        path = resolve_mesh_path(mesh.path, search)
+        if path is None:
+            where = " or ".join(str(d) for d in search)
+            problems.append(
+                problem(
+                    f"no such mesh file '{mesh.path}' (looked in {where}); allowed: an "
+                    f"absolute path or one relative to the scene file's folder or to assets/"
+                )
+            )
+            continue
+        if vessel.kind in CLASS_NAMES:  # an unknown class is reported by _check_vessel_classes
+            try:
+                load_user_mesh(
+                    path,
+                    vessel.kind,
+                    mesh.scale_m,
+                    mesh.up_axis,
+                    mesh.forward_axis,
+                    draft_m=mesh.draft_m,
+                )
+            except Exception as exc:  # trimesh raises many types; each is a located message
+                text = str(exc).strip()
+                reason = text.splitlines()[0] if text else type(exc).__name__
+                problems.append(
+                    problem(
+                        f"cannot use the mesh: {reason}; allowed: a readable {allowed} file "
+                        "with triangles"
+                    )
+                )
+                continue
+        resolved = mesh.model_copy(update={"path": str(path)})
+        placed[i] = vessel.model_copy(update={"mesh": resolved})
+    vessels = spec.vessels.model_copy(update={"placed": placed})
+    return problems, spec.model_copy(update={"vessels": vessels})
+
+
 def load_scene(path: str | Path) -> tuple[SceneSpec, str]:
     """Load and validate a scene file; returns the spec and the scene name.
 
@@ -266,5 +347,5 @@ def load_scene(path: str | Path) -> tuple[SceneSpec, str]:
         raise SceneFileError([Problem(str(path), 0, "", "no such file")]) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise SceneFileError([Problem(str(path), 0, "", f"cannot read: {exc}")]) from None
-    spec = parse_scene_text(text, str(path))
+    spec = parse_scene_text(text, str(path), path.parent)
     return spec, spec.name or path.stem

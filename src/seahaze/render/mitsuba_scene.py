@@ -12,7 +12,7 @@ from below the sea surface to the haze top. The medium is changed per level thro
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -152,6 +152,10 @@ class LoadedScene:
     camera_in_haze: bool
     shape_ids: dict[int, int]
     """Mitsuba shape registry id → vessel index (the sea and the haze box map to -1, -2)."""
+    spec: SceneSpec | None = None
+    """The scene spec it was built from (the ``physical`` mode needs the sun and sky)."""
+    cache: dict[str, Any] = field(default_factory=dict)
+    """Per-scene objects that passes build once and reuse across levels."""
 
     def set_haze(self, sigma_t: float, albedo: float, g: float) -> None:
         """Change the medium in place (no reload, no recompilation)."""
@@ -206,8 +210,23 @@ def build_scene(
         "sensor": _sensor_dict(
             camera, camera.width, camera.height, camera.fov_deg, camera.pitch_deg, inside
         ),
+        # The asm airlight is the haze's own horizon radiance. From a camera above the haze top
+        # a level view sees only clear sky (the same A at every level), so the airlight view
+        # then looks from mid-layer, below the camera.
         "sensor_airlight": _sensor_dict(
-            camera, AIRLIGHT_RES, AIRLIGHT_RES, AIRLIGHT_FOV_DEG, 0.0, inside
+            Camera(
+                camera.height_m if camera.height_m < top else 0.5 * top,
+                camera.fov_deg,
+                camera.pitch_deg,
+                camera.heading_deg,
+                camera.width,
+                camera.height,
+            ),
+            AIRLIGHT_RES,
+            AIRLIGHT_RES,
+            AIRLIGHT_FOV_DEG,
+            0.0,
+            haze_box,
         ),
         "sky": sunsky_dict(spec),
         HAZE_BOX_ID: {
@@ -234,4 +253,4 @@ def build_scene(
         sid = shape.id()
         index = vessel_of_part.get(sid, -2 if sid == HAZE_BOX_ID else -1)
         shape_ids[shape_registry_id(shape)] = index
-    return LoadedScene(loaded, params, camera, half_width, top, inside, shape_ids)
+    return LoadedScene(loaded, params, camera, half_width, top, inside, shape_ids, spec)

@@ -1,6 +1,10 @@
 """Render passes over one loaded scene: geometry (distance, instances), clean, hazy levels.
 
 Modes of a hazy level
+    ``physical``   seahaze's haze integrator (:mod:`seahaze.render.physical`): analytic
+                   transmittance, the sun's single scattering with shadow rays, the rest of the
+                   scattered light from a per-level plane-parallel table. Its scene has no
+                   Mitsuba medium (``build_scene(..., haze_box=False)``).
     ``reference``  Mitsuba ``volpath`` through the haze box: unbiased, slow, noisy at low spp.
     ``asm``        The atmospheric scattering model ``I = J t + A (1 - t)`` with
                    ``t = exp(-sigma L)``, ``J`` the clean radiance and ``L`` the length of the
@@ -76,8 +80,12 @@ def render_geometry(loaded: LoadedScene) -> GeometryPass:
     tracing = np.ones(n, dtype=bool)  # still walking through the box and vessels
     footprint: list[np.ndarray] = []
     current = mi.Ray3f(ray)
+    travelled = dr.zeros(mi.Float, n)  # distance along the camera ray to the current origin
     for _ in range(GEOMETRY_MAX_CROSSINGS):
         si = loaded.scene.ray_intersect(current)
+        # Evaluate every field in one kernel: read lazily, each field (and the next spawned
+        # ray) would re-trace the whole chain of crossings, quadratic in their number.
+        dr.eval(si)
         valid = np.array(si.is_valid())
         sid = np.array(dr.reinterpret_array(mi.UInt32, si.shape)).astype(np.int64)
         owner = np.where(valid, values[np.clip(np.searchsorted(keys, sid), 0, len(keys) - 1)], -3)
@@ -92,7 +100,14 @@ def render_geometry(loaded: LoadedScene) -> GeometryPass:
         tracing &= valid & ((owner == -2) | (owner >= 0))
         if not tracing.any():
             break
-        current = si.spawn_ray(current.d)
+        # Continue on the same line just past this hit. si.spawn_ray would push the origin off
+        # the line along the surface normal by ~1e-4 |p| (0.2 m on the top of a 2 km haze box
+        # seen from above it), moving the sea hit by metres at grazing angles. The step along
+        # the ray keeps the new origin past the surface despite float32 rounding of |p|.
+        step = si.t * (1.0 + 1e-5) + 1e-3
+        travelled = dr.select(si.is_valid(), travelled + step, travelled)
+        current = mi.Ray3f(ray.o + ray.d * travelled, ray.d)
+        dr.eval(travelled, current)
     distance = np.linalg.norm(hit_point - origin, axis=-1)
     distance = np.where(np.isfinite(distance), distance, np.inf).astype(np.float32)
     pairs = np.unique(np.concatenate(footprint)) if footprint else np.zeros(0, np.int64)
@@ -112,7 +127,11 @@ def render_radiance(loaded: LoadedScene, spp: int, seed: int, sensor_index: int 
     import mitsuba as mi
 
     image = mi.render(loaded.scene, sensor=sensor_index, spp=spp, seed=seed)
-    return np.array(image, dtype=np.float32)
+    # Mitsuba 3.9's sunsky gives the sun a negative blue radiance below about 3 deg elevation
+    # (RGB -58 for +3819 red: its reddened colour lies outside the sRGB gamut), so the sun, its
+    # glint and sunlit pixels can come out negative in blue. Clipping at zero is the gamut clip
+    # (light is never negative); NaN stays NaN for the tests to catch.
+    return np.maximum(np.array(image, dtype=np.float32), 0.0)
 
 
 def render_clean(loaded: LoadedScene, spp: int, seed: int, albedo: float, g: float) -> np.ndarray:
@@ -220,7 +239,7 @@ def render_level(
     render: RenderSpec,
     level_index: int,
 ) -> LevelRender:
-    """Render one hazy level of extinction ``sigma`` (1/m) in ``mode`` (``reference``/``asm``).
+    """Render one hazy level of extinction ``sigma`` (1/m) in ``mode`` (physical/reference/asm).
 
     The single entry point for every caller (pipeline, verify, benchmarks), so a mode behaves
     the same everywhere. ``clean`` and ``geometry`` are the scene's clean and geometry passes.
@@ -235,4 +254,16 @@ def render_level(
             loaded, sigma, haze.albedo, haze.g, render.airlight_spp, render.seed, level_index
         )
         return LevelRender(asm_level(clean, geometry, sigma, airlight.rgb, haze.top_m), airlight)
-    raise ValueError(f"unknown render mode {mode!r}; allowed: reference, asm")
+    if mode == "physical":
+        from .physical import PhysicalRenderer
+
+        if loaded.spec is None:
+            raise ValueError("the physical mode needs a scene built by build_scene")
+        renderer = loaded.cache.get("physical")
+        if renderer is None:
+            renderer = loaded.cache["physical"] = PhysicalRenderer(loaded, loaded.spec)
+        radiance, _ = renderer.render(
+            sigma, haze.albedo, haze.g, render.spp, _seed(render.seed, 3, level_index)
+        )
+        return LevelRender(radiance)
+    raise ValueError(f"unknown render mode {mode!r}; allowed: physical, reference, asm")

@@ -24,7 +24,12 @@ from seahaze.vessels.library import (
 )
 from seahaze.vessels.materials import Material
 from seahaze.vessels.model import VesselModel, VesselPart
-from seahaze.vessels.user_mesh import SUPPORTED_FORMATS, load_user_mesh
+from seahaze.vessels.user_mesh import (
+    SUPPORTED_FORMATS,
+    load_user_mesh,
+    mesh_search_dirs,
+    resolve_mesh_path,
+)
 
 __all__ = [
     "CLASS_NAMES",
@@ -42,7 +47,9 @@ __all__ = [
     "build_vessel",
     "class_id",
     "load_user_mesh",
+    "mesh_search_dirs",
     "place_explicit",
     "place_on_sea",
+    "resolve_mesh_path",
     "sample_layout",
 ]

@@ -17,8 +17,9 @@ Footprints and overlap
 ----------------------
 Each vessel occupies an oriented rectangle ``length × max_beam`` (``max_beam`` = the class's
 largest beam/length ratio × length, so the check holds whatever beam ``build_vessel`` later
-samples), grown by ``min_separation_m / 2`` on every side. Two vessels overlap when their
-grown rectangles intersect (separating-axis test). A rectangle may not contain the camera.
+samples; a user mesh uses its real beam), grown by ``min_separation_m / 2`` on every side.
+Two vessels overlap when their grown rectangles intersect (separating-axis test). A rectangle
+may not contain the camera.
 
 Distance distributions (``distance_range_m = (d_min, d_max)``)
 --------------------------------------------------------------
@@ -72,6 +73,8 @@ class ExplicitVessel:
     """One vessel of an explicit layout (see the module docstring for the frame).
 
     ``length_m`` None: sampled uniformly inside the class range by :func:`place_explicit`.
+    ``beam_m``: the real beam of a user mesh (see :class:`Placement`); its ``length_m`` is then
+    required and need not lie inside the class range, since the user sized the model.
     """
 
     kind: str
@@ -79,12 +82,17 @@ class ExplicitVessel:
     bearing_deg: float
     heading_deg: float
     length_m: float | None = None
+    beam_m: float | None = None
 
 
 @dataclass(frozen=True)
 class Placement:
     """Where a vessel sits: world position (m) of its midships origin, bow azimuth (deg),
-    and the length to build it with (``build_vessel(kind, length_m, rng)``)."""
+    and the length to build it with (``build_vessel(kind, length_m, rng)``).
+
+    ``beam_m`` is set for a user mesh, whose beam is known before layout; the footprint then
+    uses it instead of the class's largest beam at that length.
+    """
 
     kind: str
     x: float
@@ -93,6 +101,7 @@ class Placement:
     length_m: float
     distance_m: float
     bearing_deg: float
+    beam_m: float | None = None
 
 
 class PlacedPart(NamedTuple):
@@ -105,14 +114,16 @@ class PlacedPart(NamedTuple):
 
 
 # --------------------------------------------------------------------------- footprints
-def _footprint_beam(kind: str, length_m: float) -> float:
-    return get_class(kind).max_beam_m(length_m)
+def _footprint_beam(placement: Placement) -> float:
+    if placement.beam_m is not None:
+        return placement.beam_m
+    return get_class(placement.kind).max_beam_m(placement.length_m)
 
 
 def footprint_corners(placement: Placement, margin_m: float = 0.0) -> np.ndarray:
     """(4, 2) world xy corners of the placement's rectangle grown by ``margin_m`` per side."""
     half_l = 0.5 * placement.length_m + margin_m
-    half_b = 0.5 * _footprint_beam(placement.kind, placement.length_m) + margin_m
+    half_b = 0.5 * _footprint_beam(placement) + margin_m
     h = np.radians(placement.heading_deg)
     fwd = np.array([np.cos(h), np.sin(h)])
     port = np.array([-np.sin(h), np.cos(h)])
@@ -163,6 +174,7 @@ def _placement(
     heading_deg: float,
     length_m: float,
     camera_heading_deg: float,
+    beam_m: float | None = None,
 ) -> Placement:
     az = np.radians(camera_heading_deg + bearing_deg)
     return Placement(
@@ -173,6 +185,7 @@ def _placement(
         length_m=float(length_m),
         distance_m=float(distance_m),
         bearing_deg=float(bearing_deg),
+        beam_m=None if beam_m is None else float(beam_m),
     )
 
 
@@ -193,9 +206,10 @@ def place_explicit(
 
     Items may be :class:`ExplicitVessel`, any object with those attributes, or mappings.
     A missing/None ``length_m`` is sampled from ``rng`` inside the class range; a given one
-    must lie inside it. Raises :class:`LayoutError` (a ValueError) naming the two vessels if
-    any footprints overlap (with ``min_separation_m``), or naming a vessel that covers the
-    camera; ValueError for unknown kinds, out-of-range lengths or non-positive distances.
+    must lie inside it, except for a user mesh (an item with ``beam_m``). Raises
+    :class:`LayoutError` (a ValueError) naming the two vessels if any footprints overlap (with
+    ``min_separation_m``), or naming a vessel that covers the camera; ValueError for unknown
+    kinds, out-of-range lengths or non-positive distances.
     """
     placements: list[Placement] = []
     for item in items:
@@ -205,10 +219,13 @@ def place_explicit(
         if distance <= 0.0:
             raise ValueError(f"{kind}: distance_m must be > 0, got {distance:g}")
         length = _field(item, "length_m", None)
+        beam = _field(item, "beam_m", None)
+        if beam is not None and length is None:
+            raise ValueError(f"{kind}: a user mesh (beam_m given) needs its length_m")
         if length is None:
             length = _sample_length(kind, rng)
         lo, hi = vc.length_range_m
-        if not lo <= float(length) <= hi:
+        if beam is None and not lo <= float(length) <= hi:
             raise ValueError(
                 f"{kind} length {float(length):g} m is outside the class range [{lo:g}, {hi:g}] m"
             )
@@ -220,6 +237,7 @@ def place_explicit(
                 float(_field(item, "heading_deg")),
                 float(length),
                 camera_heading_deg,
+                beam,
             )
         )
     margin = 0.5 * max(min_separation_m, 0.0)

@@ -33,9 +33,20 @@ from seahaze.vessels.library import CLASS_NAMES
 from seahaze.vessels.materials import Material, material_from_srgb8
 from seahaze.vessels.model import VesselModel, VesselPart
 
-__all__ = ["DEFAULT_DRAFT_FRACTION", "SUPPORTED_FORMATS", "axes_rotation", "load_user_mesh"]
+__all__ = [
+    "ASSETS_DIR",
+    "DEFAULT_DRAFT_FRACTION",
+    "SUPPORTED_FORMATS",
+    "axes_rotation",
+    "load_user_mesh",
+    "mesh_search_dirs",
+    "resolve_mesh_path",
+]
 
 SUPPORTED_FORMATS = (".obj", ".ply", ".glb", ".gltf", ".stl")
+ASSETS_DIR = Path(__file__).resolve().parents[3] / "assets"
+"""The repository's ``assets/`` folder (src/seahaze/vessels → repo root), a search place for
+relative mesh paths; absent in a non-editable install, where only the other places apply."""
 DEFAULT_DRAFT_FRACTION = 0.10
 DEFAULT_PAINT = material_from_srgb8("user_default_grey", (170, 170, 170), 0.5)
 _MAX_COLOUR_GROUPS = 16
@@ -189,6 +200,21 @@ def load_user_mesh(
         air_draft_m=float(height - draft),
         parts=parts,
     )
+
+
+def mesh_search_dirs(scene_dir: str | Path | None = None) -> list[Path]:
+    """Where a relative mesh path is looked up, in order: the scene file's folder (or the
+    working directory for a scene without a file), then the repository's ``assets/``."""
+    first = Path(scene_dir) if scene_dir is not None else Path.cwd()
+    return [first.resolve(), ASSETS_DIR]
+
+
+def resolve_mesh_path(path: str | Path, search_dirs: list[Path]) -> Path | None:
+    """The absolute file ``path`` names: itself when absolute, else the first existing
+    ``dir / path`` of ``search_dirs``; None when there is no such file."""
+    path = Path(path).expanduser()
+    candidates = [path] if path.is_absolute() else [d / path for d in search_dirs]
+    return next((c.resolve() for c in candidates if c.is_file()), None)
 
 
 def _unique(name: str, used: set[str]) -> str:
