@@ -19,10 +19,6 @@ from .camera import Camera
 from .dataset import (
     CLEAN,
     Layout,
-    data_yaml_text,
-    level_entries,
-    manifest,
-    write_coco,
     write_json,
     write_text,
 )
@@ -31,7 +27,6 @@ from .render import passes
 from .render.mitsuba_scene import build_scene
 from .render.variant import select_variant
 from .spec import SceneSpec
-from .vessels import CLASS_NAMES
 from .visibility import extinction_coefficient, level_name
 
 Progress = Callable[[str], None]
@@ -71,9 +66,13 @@ HORIZON_SKY_BAND_DEG = 2.0
 def horizon_luminance(
     radiance: np.ndarray, distance: np.ndarray, elevation: np.ndarray
 ) -> float | None:
-    """Median luminance of the sky just above the horizon, or None where none is in view."""
+    """Mean luminance of the sky just above the horizon, or None where none is in view.
+
+    The mean, not the median: Monte Carlo noise is skewed (rare bright samples), so the median
+    of a noisy band reads low and would bias every apparent contrast.
+    """
     band = np.isinf(distance) & (elevation >= 0.0) & (elevation < HORIZON_SKY_BAND_DEG)
-    return float(np.median(imaging.luminance(radiance[band]))) if band.sum() >= 4 else None
+    return float(np.mean(imaging.luminance(radiance[band]))) if band.sum() >= 4 else None
 
 
 def apparent_contrasts(
@@ -144,7 +143,10 @@ def render_scene(
     with _Timer(timings, "geometry_build"):
         geometry = build_geometry(spec, camera)
     with _Timer(timings, "scene_load"):
-        loaded = build_scene(spec, camera, geometry, levels)
+        # The physical mode computes the haze itself: no Mitsuba medium in its scene.
+        loaded = build_scene(
+            spec, camera, geometry, levels, haze_box=spec.render.mode != "physical"
+        )
     progress(f"{name}: scene loaded ({variant}, {len(geometry.vessels)} vessels)")
 
     with _Timer(timings, "aov"):
@@ -247,45 +249,21 @@ class DatasetError(ValueError):
 def render_dataset(
     scenes: Sequence[tuple[SceneSpec, str]], root: Path, progress: Progress = _quiet
 ) -> list[SceneResult]:
-    """Render several scenes into one dataset folder and write ``data.yaml`` and "
-    "``dataset.json``."""
-    if not scenes:
-        raise DatasetError("no scene to render")
-    first = scenes[0][0].haze
-    for spec, name in scenes[1:]:
-        if list(spec.haze.levels) != list(first.levels) or spec.haze.threshold != first.threshold:
-            raise DatasetError(
-                f"scene '{name}' has other haze levels or threshold than '{scenes[0][1]}'; "
-                "pass --vis to use the same levels"
-            )
-    names = [n for _, n in scenes]
-    duplicates = {n for n in names if names.count(n) > 1}
-    if duplicates:
-        raise DatasetError(
-            f"two scenes share the name(s) {sorted(duplicates)}; set 'name:' in the YAML"
-        )
-    layout = Layout(root)
-    root.mkdir(parents=True, exist_ok=True)
-    levels = level_entries(list(first.levels), first.threshold)
-    write_text(
-        layout.data_yaml, data_yaml_text(root, [entry["name"] for entry in levels], CLASS_NAMES)
-    )
-    results = []
-    scene_status: dict[str, Any] = {}
-    for spec, name in scenes:
-        result = render_scene(spec, name, root, progress)
-        results.append(result)
-        scene_status[name] = {
-            "status": "done",
-            "seed": spec.render.seed,
-            "config": spec.model_dump(mode="json", by_alias=True),
-        }
-        config = {
-            "threshold": str(first.threshold),
-            "mode": spec.render.mode,
-            "spp": spec.render.spp,
-            "resolution": list(spec.camera.resolution),
-        }
-        write_json(layout.manifest, manifest(config, levels, CLASS_NAMES, scene_status))
-    write_coco(root)
-    return results
+    """Render scenes into one dataset folder with ``data.yaml``, ``dataset.json`` and COCO files.
+
+    One scene per ``(spec, name)``, rendered in this process by :mod:`seahaze.batch` (locked,
+    resumable: scenes the folder already holds with the same config are skipped). Returns the
+    results of the scenes rendered by this call. Raises :class:`DatasetError` for scenes that
+    cannot form one dataset, :class:`seahaze.batch.BatchRefusedError` for a locked folder or
+    one made with another config, and :class:`seahaze.batch.BatchFailedError` when a scene
+    failed or a write error stopped the batch.
+    """
+    from .batch import BatchFailedError, Reporter, plan_scenes, run_batch
+
+    reporter = Reporter(quiet=True, notes=progress)
+    report = run_batch(plan_scenes(scenes), root, reporter=reporter)
+    if report.outcome == "interrupted":
+        raise KeyboardInterrupt
+    if report.outcome != "complete":
+        raise BatchFailedError(report)
+    return report.results

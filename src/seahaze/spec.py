@@ -8,7 +8,7 @@ Azimuths and headings are measured counter-clockwise from +x when seen from abov
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 from pydantic.fields import FieldInfo
@@ -227,12 +227,60 @@ class SeaSpec(_Spec):
     )
 
 
+AxisName = Literal["+x", "-x", "+y", "-y", "+z", "-z"]
+"""A signed axis of a mesh file's own frame."""
+
+
+class UserMeshSpec(_Spec):
+    """A vessel mesh file used instead of the class's procedural model.
+
+    The mesh is rotated so `forward_axis` points to the bow and `up_axis` up, scaled to the
+    length `scale_m`, centred on midships and sunk to its draft (rules in `assets/README.md`).
+    Its boxes get the YOLO id of the placed vessel's `class`.
+    """
+
+    path: str = Field(
+        min_length=1,
+        description="Mesh file (.obj .ply .glb .gltf .stl): absolute, relative to the scene "
+        "file's folder, or relative to the repository's `assets/` folder.",
+    )
+    scale_m: float = Field(
+        gt=0.0,
+        le=500.0,
+        description="Overall length after scaling, along `forward_axis` (a length, not a "
+        "factor: the file's units do not matter).",
+        json_schema_extra=_unit("m"),
+    )
+    up_axis: AxisName = Field("+z", description="The file's up axis (glTF exports: `+y`).")
+    forward_axis: AxisName = Field(
+        "+x", description="The file's bow direction, perpendicular to `up_axis`."
+    )
+    draft_m: float | None = Field(
+        None,
+        ge=0.0,
+        le=50.0,
+        description="Depth of the lowest point below the waterline; default 10 % of the "
+        "scaled height.",
+        json_schema_extra=_unit("m"),
+    )
+
+    @model_validator(mode="after")
+    def _perpendicular_axes(self) -> UserMeshSpec:
+        if self.up_axis[1] == self.forward_axis[1]:
+            raise ValueError(
+                f"up_axis {self.up_axis} and forward_axis {self.forward_axis} must be "
+                "perpendicular (different letters)"
+            )
+        return self
+
+
 class PlacedVessel(_Spec):
     """One vessel at an explicit place relative to the camera."""
 
     kind: str = Field(
         alias="class",
-        description="Vessel class, one of the library's classes (see `seahaze classes`).",
+        description="Vessel class, one of the library's classes (see `seahaze classes`); "
+        "with `mesh`, the class the mesh is labelled as.",
     )
     distance_m: float = Field(
         gt=10.0,
@@ -258,9 +306,21 @@ class PlacedVessel(_Spec):
         None,
         gt=1.0,
         le=500.0,
-        description="Length overall; default sampled in the class's range.",
+        description="Length overall; default sampled in the class's range (not with `mesh`, "
+        "whose length is `mesh.scale_m`).",
         json_schema_extra=_unit("m"),
     )
+    mesh: UserMeshSpec | None = Field(
+        None, description="A user mesh file instead of the procedural model of the class."
+    )
+
+    @model_validator(mode="after")
+    def _one_length(self) -> PlacedVessel:
+        if self.mesh is not None and self.length_m is not None:
+            raise ValueError(
+                "length_m does not apply to a user mesh: give its length as mesh.scale_m"
+            )
+        return self
 
 
 class VesselSampler(_Spec):
@@ -319,6 +379,11 @@ class VesselsSpec(_Spec):
     )
     sample: VesselSampler | None = Field(
         None, description="Vessels drawn at random (added to `placed`)."
+    )
+    follow_slope: bool = Field(
+        False,
+        description="Pitch and roll every vessel to the sea slope across its length and beam "
+        "(a long ship bridges short waves); default upright, heaving only.",
     )
 
 
@@ -381,10 +446,12 @@ class LabelsSpec(_Spec):
 class RenderSpec(_Spec):
     """How the scene is rendered."""
 
-    mode: Literal["reference", "asm"] = Field(
+    mode: Literal["physical", "reference", "asm"] = Field(
         "asm",
-        description="Hazy-level renderer: `asm` composite from the clean image and distance, "
-        "or `reference` Mitsuba volpath.",
+        description="Hazy-level renderer: `physical` (seahaze's haze integrator: analytic "
+        "transmittance, sun single scattering with shadow rays, tabulated multiple scattering), "
+        "`reference` (Mitsuba volpath, slow and noisy) or `asm` (composite of the clean image, "
+        "distance and a horizon airlight). See docs/physics.md.",
     )
     spp: int = Field(
         64,
@@ -425,6 +492,68 @@ class RenderSpec(_Spec):
     write_exr: bool = Field(True, description="Also write linear radiance as EXR for every image.")
 
 
+_AngleEnd = Annotated[float, Field(ge=-360.0, le=360.0)]
+_ElevationEnd = Annotated[float, Field(ge=0.5, le=89.5)]
+_WindEnd = Annotated[float, Field(ge=0.0, le=40.0)]
+
+
+class VariationSpec(_Spec):
+    """Per-scene variation of a batch (`seahaze render --scenes N`).
+
+    Scene `i` of a batch gets its own seed, derived from the master seed (`--seed`, else
+    `render.seed`), the scene file's name and `i`; each range given here is sampled uniformly
+    with that seed, and a range left out keeps the scene's value. Without `--scenes` this
+    section is ignored.
+    """
+
+    camera_heading_deg: tuple[_AngleEnd, _AngleEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `camera.heading_deg` (each end within -360..360).",
+        json_schema_extra=_unit("deg"),
+    )
+    sun_elevation_deg: tuple[_ElevationEnd, _ElevationEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `sun.elevation_deg` (each end within 0.5..89.5).",
+        json_schema_extra=_unit("deg"),
+    )
+    sun_azimuth_deg: tuple[_AngleEnd, _AngleEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `sun.azimuth_deg` (each end within -360..360).",
+        json_schema_extra=_unit("deg"),
+    )
+    wind_speed: tuple[_WindEnd, _WindEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `sea.wind_speed` (each end within 0..40); it "
+        "replaces `sea.beaufort`.",
+        json_schema_extra=_unit("m/s"),
+    )
+    sea_direction_deg: tuple[_AngleEnd, _AngleEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `sea.direction_deg` (each end within -360..360).",
+        json_schema_extra=_unit("deg"),
+    )
+    resample_sea: bool = Field(
+        True,
+        description="Give every scene new wave phases (a `sea.seed` is replaced by one derived "
+        "from the scene's seed).",
+    )
+    resample_layout: bool = Field(
+        True,
+        description="Give every scene a new `vessels.sample` layout (its `seed` is replaced by "
+        "one derived from the scene's seed); `vessels.placed` stay where they are.",
+    )
+
+    @model_validator(mode="after")
+    def _ordered_ranges(self) -> VariationSpec:
+        for name in type(self).model_fields:
+            value = getattr(self, name)
+            if isinstance(value, tuple) and value[0] > value[1]:
+                raise ValueError(
+                    f"{name} must be [low, high] with low <= high, got [{value[0]:g}, {value[1]:g}]"
+                )
+        return self
+
+
 class SceneSpec(_Spec):
     """A whole scene: camera, sun, sky, sea, vessels, haze and render settings."""
 
@@ -441,10 +570,18 @@ class SceneSpec(_Spec):
     haze: HazeSpec = Field(default_factory=HazeSpec)
     labels: LabelsSpec = Field(default_factory=LabelsSpec)
     render: RenderSpec = Field(default_factory=RenderSpec)
+    variation: VariationSpec = Field(
+        default_factory=VariationSpec,
+        description="Ranges the scenes of a batch (`--scenes N`) are drawn from.",
+    )
 
 
 class OverrideError(ValueError):
     """A command-line override that the schema rejects; the message is one line for the user."""
+
+
+RENDER_MODES: tuple[str, ...] = get_args(RenderSpec.model_fields["mode"].annotation)
+"""The hazy-level renderers, in the order the CLI lists them."""
 
 
 def with_overrides(

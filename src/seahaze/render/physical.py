@@ -39,9 +39,14 @@ from ..spec import SceneSpec
 from .diffuse_table import DEFAULT_GRID, DiffuseTable, TableGrid, build_diffuse_table
 from .mitsuba_scene import HAZE_BOTTOM_M, LoadedScene, sunsky_dict
 
-DEFAULT_BOUNCES = 6
-"""Surface interactions per camera path (sea glints of vessels, vessel inter-reflections)."""
+DEFAULT_BOUNCES = 3
+"""Surface interactions per camera path: sea → sky, vessel → sea → sky. Measured on the
+default scene at V = 1000 m, 6 instead of 3 changes the mean by < 0.05 %; 1 loses 0.15 %."""
 TABLE_PHOTONS = 1 << 17
+"""Photons per level table (half from the sun, half from the sky): ~1 % noise per table bin."""
+CAMERA_POINTS = 2
+"""Stratified in-scattering points on the camera segment. 2 instead of 1 cuts the per-pixel
+noise by a fifth for ~10 % more time; 4 gains little more (default scene, 320×180)."""
 
 
 def _mi():
@@ -132,7 +137,10 @@ def _mis(pdf_a: Any, pdf_b: Any) -> Any:
 
 
 def make_integrator(
-    sun: Any, bounces: int = DEFAULT_BOUNCES, top_m: float = 300.0, camera_points: int = 4
+    sun: Any,
+    bounces: int = DEFAULT_BOUNCES,
+    top_m: float = 300.0,
+    camera_points: int = CAMERA_POINTS,
 ) -> Any:
     """A new haze integrator instance (class defined lazily: it needs a Mitsuba variant).
 
@@ -369,4 +377,6 @@ class PhysicalRenderer:
         table_seconds = time.perf_counter() - start
         self.integrator.set_level(sigma, albedo, g, table)
         image = mi.render(self.loaded.scene, integrator=self.integrator, spp=spp, seed=seed)
-        return np.array(image, dtype=np.float32), PhysicalLevel(table, table_seconds)
+        # Clipped at zero like every pass: Mitsuba's low sun has a slightly negative blue.
+        radiance = np.maximum(np.array(image, dtype=np.float32), 0.0)
+        return radiance, PhysicalLevel(table, table_seconds)
