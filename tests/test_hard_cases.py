@@ -30,7 +30,7 @@ from seahaze.visibility import extinction_coefficient, level_name
 
 pytestmark = pytest.mark.usefixtures("mitsuba_variant")
 
-MODES = ("reference", "asm")
+MODES = ("physical", "reference", "asm")
 """Every hazy-level mode; a new mode is added here and runs through every case."""
 
 LEVEL_V = 1000.0
@@ -202,6 +202,10 @@ class Shared:
         self.camera = Camera.from_spec(self.spec.camera)
         self.geometry = build_geometry(self.spec, self.camera)
         self.loaded = build_scene(self.spec, self.camera, self.geometry, visibilities)
+        # The physical mode's scene has no Mitsuba medium; same geometry, same clean pass.
+        self.loaded_physical = build_scene(
+            self.spec, self.camera, self.geometry, visibilities, haze_box=False
+        )
         self.geo = passes.render_geometry(self.loaded)
         self.clean = passes.render_clean(
             self.loaded, self.spec.render.spp, 1, self.spec.haze.albedo, self.spec.haze.g
@@ -210,8 +214,9 @@ class Shared:
     def level(self, mode: str, visibility: float, **haze: float) -> passes.LevelRender:
         spec = self.spec.haze.model_copy(update=haze)
         sigma = extinction_coefficient(visibility, spec.threshold)
+        loaded = self.loaded_physical if mode == "physical" else self.loaded
         return passes.render_level(
-            mode, self.loaded, self.geo, self.clean, sigma, spec, self.spec.render, 0
+            mode, loaded, self.geo, self.clean, sigma, spec, self.spec.render, 0
         )
 
 
@@ -278,10 +283,20 @@ def board_scene():
     board = box_vessel(0, (BOARD_DISTANCE_M + 1.0, 0.0, 7.5), (2.0, 40.0, 15.0))
     board.parts[0].rgb = (0.02, 0.02, 0.02)
     loaded, camera = load_flat_scene(spec, vessels=[board], visibilities=CONTRAST_LEVELS)
+    physical, _ = load_flat_scene(
+        spec, vessels=[board], visibilities=CONTRAST_LEVELS, haze_box=False
+    )
     geo = passes.render_geometry(loaded)
     clean = passes.render_clean(loaded, spec.render.spp, 5, spec.haze.albedo, spec.haze.g)
     elevation = np.degrees(np.arcsin(np.clip(geo.directions[..., 2], -1.0, 1.0)))
-    return spec, loaded, camera, geo, clean, elevation
+    return (
+        spec,
+        {"physical": physical, "reference": loaded, "asm": loaded},
+        camera,
+        geo,
+        clean,
+        elevation,
+    )
 
 
 def board_levels(board_scene, mode: str, levels: tuple[float, ...]) -> list[passes.LevelRender]:
@@ -289,7 +304,7 @@ def board_levels(board_scene, mode: str, levels: tuple[float, ...]) -> list[pass
     return [
         passes.render_level(
             mode,
-            loaded,
+            loaded[mode],
             geo,
             clean,
             extinction_coefficient(v, spec.haze.threshold),

@@ -157,9 +157,14 @@ class LoadedScene:
     cache: dict[str, Any] = field(default_factory=dict)
     """Per-scene objects that passes build once and reuse across levels."""
 
+    @property
+    def has_haze_box(self) -> bool:
+        """Whether the scene holds the Mitsuba haze medium (not so for the physical mode)."""
+        return f"{HAZE_ID}.sigma_t.value.value" in self.params
+
     def set_haze(self, sigma_t: float, albedo: float, g: float) -> None:
         """Change the medium in place (no reload, no recompilation)."""
-        if f"{HAZE_ID}.sigma_t.value.value" not in self.params:
+        if not self.has_haze_box:
             if sigma_t > 0.0:
                 raise ValueError("this scene was loaded without a haze box (haze_box=False)")
             return

@@ -257,8 +257,11 @@ def render_level(
     if mode == "physical":
         from .physical import PhysicalRenderer
 
-        if loaded.spec is None:
-            raise ValueError("the physical mode needs a scene built by build_scene")
+        if loaded.spec is None or loaded.has_haze_box:
+            raise ValueError(
+                "the physical mode needs a scene from build_scene(..., haze_box=False): it "
+                "computes the haze itself, and a Mitsuba medium would be crossed as a surface"
+            )
         renderer = loaded.cache.get("physical")
         if renderer is None:
             renderer = loaded.cache["physical"] = PhysicalRenderer(loaded, loaded.spec)

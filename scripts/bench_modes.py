@@ -1,0 +1,317 @@
+"""Speed versus error of every hazy-level mode against converged references (issues #5, #6).
+
+The benchmark scene (``scenes/benchmark.yaml``, 80×45) is rendered at 300, 1000 and 4000 m by
+each mode at several sample counts. Each configuration runs in its own process, so its peak
+memory is its own; kernels are compiled by a 1-spp warm-up render first, so the times are warm.
+Errors are measured against the converged ``reference`` images in
+``assets/references/benchmark/`` (``scripts/make_references.py``; checksums verified):
+
+* relative error = mean absolute error / mean, on luminance, over all pixels and over the sea,
+  sky and vessel pixels (from the geometry pass);
+* the reference's own noise floor, ``sqrt(2/π) · mean(SE) / mean``: the error a perfect
+  renderer would show against it;
+* the time ``reference`` would need for the same error, from its error at the highest spp
+  measured scaled by ``1/sqrt(time)`` (Monte Carlo convergence).
+
+Results: the "modes" section of docs/benchmarks.md, ``docs/images/bench_speed_error.png``
+(log-log) and ``docs/images/bench_strip.png`` (reference, asm and physical side by side).
+
+Usage: python scripts/bench_modes.py [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "scripts"))
+from bench_passes import replace_section  # noqa: E402
+
+SCENE = ROOT / "scenes" / "benchmark.yaml"
+REFS = ROOT / "assets" / "references" / "benchmark"
+IMAGES = ROOT / "docs" / "images"
+LEVELS = (300.0, 1000.0, 4000.0)
+CONFIGS: dict[str, tuple[int, ...]] = {
+    "reference": (16, 64, 256, 1024),
+    "asm": (64, 1024),
+    "physical": (4, 16, 64, 256, 1024),
+}
+QUICK: dict[str, tuple[int, ...]] = {"reference": (16, 64), "asm": (64,), "physical": (16, 64)}
+STRIP_SPP = {"reference": 64, "asm": 64, "physical": 64}
+
+
+def _peak_mib() -> float:
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024
+    return float("nan")
+
+
+def child(mode: str, spp: int, out: Path) -> None:
+    """Render the three levels in ``mode`` at ``spp`` and save radiance, timings and memory."""
+    from seahaze.camera import Camera
+    from seahaze.geometry import build_geometry
+    from seahaze.render import passes
+    from seahaze.render.mitsuba_scene import build_scene
+    from seahaze.render.variant import select_variant
+    from seahaze.sceneio import load_scene
+    from seahaze.spec import with_overrides
+    from seahaze.visibility import extinction_coefficient
+
+    spec, _ = load_scene(SCENE)
+    spec = with_overrides(spec, spp=spp, mode=mode)
+    variant = select_variant(spec.render.variant)
+    camera = Camera.from_spec(spec.camera)
+    geometry = build_geometry(spec, camera)
+    loaded = build_scene(spec, camera, geometry, list(LEVELS), haze_box=mode != "physical")
+    haze = spec.haze
+    geo = passes.render_geometry(loaded)
+    warm = with_overrides(spec, spp=1)
+    passes.render_clean(loaded, 1, 0, haze.albedo, haze.g)
+    start = time.perf_counter()
+    clean = passes.render_clean(loaded, spp, 1, haze.albedo, haze.g)
+    clean_s = time.perf_counter() - start
+    images, seconds = [], []
+    for i, v in enumerate(LEVELS):
+        sigma = extinction_coefficient(v, haze.threshold)
+        passes.render_level(mode, loaded, geo, clean, sigma, haze, warm.render, 100 + i)
+        start = time.perf_counter()
+        level = passes.render_level(mode, loaded, geo, clean, sigma, haze, spec.render, i)
+        seconds.append(time.perf_counter() - start)
+        images.append(level.radiance)
+    np.savez(
+        out,
+        images=np.stack(images),
+        seconds=np.array(seconds),
+        clean_seconds=clean_s,
+        peak_mib=_peak_mib(),
+        variant=variant,
+        distance=geo.distance_m,
+        instance=geo.instance,
+        elevation=np.degrees(np.arcsin(np.clip(geo.directions[..., 2], -1.0, 1.0))),
+    )
+
+
+def load_references() -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict]:
+    """Reference radiance and luminance standard error per level, after checking checksums."""
+    from seahaze.imaging import read_exr
+
+    meta = json.loads((REFS / "references.json").read_text())
+    if meta["scene_sha256"] != hashlib.sha256(SCENE.read_bytes()).hexdigest():
+        raise SystemExit("scenes/benchmark.yaml changed since the references were rendered")
+    for line in (REFS / "SHA256SUMS").read_text().split("\n"):
+        if line.strip():
+            digest, name = line.split()
+            if hashlib.sha256((REFS / name).read_bytes()).hexdigest() != digest:
+                raise SystemExit(f"checksum mismatch for {REFS / name}")
+    rgb, se = {}, {}
+    for key in ["clean", *(f"v{int(v):04d}" for v in LEVELS)]:
+        channels = read_exr(REFS / f"{key}.exr")
+        rgb[key] = (
+            channels["RGB"]
+            if "RGB" in channels
+            else np.stack([channels[c] for c in "RGB"], axis=-1)
+        )
+        se[key] = channels["Y_SE"]
+    return rgb, se, meta
+
+
+def errors(y: np.ndarray, y_ref: np.ndarray, regions: dict[str, np.ndarray]) -> dict[str, float]:
+    """Relative mean absolute error per region and the relative bias over the whole image."""
+    out = {
+        name: float(np.abs(y[m] - y_ref[m]).mean() / y_ref[m].mean()) for name, m in regions.items()
+    }
+    out["bias"] = float(y.mean() / y_ref.mean() - 1.0)
+    return out
+
+
+def run_configs(configs: dict[str, tuple[int, ...]], work: Path) -> list[dict]:
+    """Run every (mode, spp) in its own process; return their results."""
+    rows = []
+    for mode, spps in configs.items():
+        for spp in spps:
+            out = work / f"{mode}-{spp}.npz"
+            print(f"{mode} {spp} spp ...", flush=True)
+            subprocess.run(
+                [sys.executable, __file__, "--child", mode, str(spp), str(out)], check=True
+            )
+            data = np.load(out)
+            rows.append({"mode": mode, "spp": spp, **{k: data[k] for k in data.files}})
+    return rows
+
+
+def analyse(rows: list[dict]) -> list[dict]:
+    """Per (mode, spp, level): time, memory, errors; and the reference-time equivalent."""
+    from seahaze.imaging import luminance
+
+    ref_rgb, ref_se, _ = load_references()
+    first = rows[0]
+    sky = np.isinf(first["distance"])
+    vessel = first["instance"] >= 0
+    regions = {"all": np.ones_like(sky), "sea": ~sky & ~vessel, "sky": sky, "vessel": vessel}
+    table = []
+    for row in rows:
+        for i, v in enumerate(LEVELS):
+            key = f"v{int(v):04d}"
+            y_ref = luminance(ref_rgb[key])
+            err = errors(luminance(row["images"][i]), y_ref, regions)
+            floor = float(np.sqrt(2 / np.pi) * ref_se[key].mean() / y_ref.mean())
+            table.append(
+                {
+                    "mode": row["mode"],
+                    "spp": row["spp"],
+                    "level": v,
+                    "seconds": float(row["seconds"][i]),
+                    "clean_seconds": float(row["clean_seconds"]),
+                    "peak_mib": float(row["peak_mib"]),
+                    "floor": floor,
+                    **err,
+                }
+            )
+    for v in LEVELS:
+        refs = [r for r in table if r["mode"] == "reference" and r["level"] == v]
+        best = max(refs, key=lambda r: r["spp"]) if refs else None
+        for r in table:
+            if r["level"] != v or best is None:
+                continue
+            # Reference error above its own floor falls as 1/sqrt(time).
+            e_ref = max(best["all"] ** 2 - best["floor"] ** 2, 1e-12) ** 0.5
+            e = max(r["all"] ** 2 - r["floor"] ** 2, 1e-12) ** 0.5
+            r["reference_seconds_same_error"] = best["seconds"] * (e_ref / e) ** 2
+    return table
+
+
+def plot(table: list[dict]) -> None:
+    """Log-log speed versus error, one line per mode and level."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=120)
+    colours = {"reference": "tab:red", "asm": "tab:orange", "physical": "tab:blue"}
+    markers = {300.0: "o", 1000.0: "s", 4000.0: "^"}
+    for mode, colour in colours.items():
+        for v, marker in markers.items():
+            pts = sorted(
+                (r["seconds"], r["all"]) for r in table if r["mode"] == mode and r["level"] == v
+            )
+            if pts:
+                xs, ys = zip(*pts, strict=True)
+                ax.loglog(xs, ys, marker=marker, color=colour, label=f"{mode}, V = {v:g} m")
+    floors = [r["floor"] for r in table]
+    ax.axhline(max(floors), color="grey", ls=":", lw=1, label="reference noise floor (max)")
+    ax.axhline(0.03, color="black", ls="--", lw=0.8, label="3 % target")
+    ax.set_xlabel("wall seconds per level (80×45, warm)")
+    ax.set_ylabel("relative error (MAE / mean luminance)")
+    ax.set_title("seahaze modes: speed versus error (benchmark scene)")
+    ax.legend(fontsize=7, ncol=2)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    IMAGES.mkdir(parents=True, exist_ok=True)
+    fig.savefig(IMAGES / "bench_speed_error.png")
+
+
+def strip(rows: list[dict]) -> None:
+    """Reference, asm and physical side by side per level (exposure from the clean reference)."""
+    from PIL import Image, ImageDraw
+
+    from seahaze.imaging import auto_exposure, to_srgb8
+
+    ref_rgb, _, _ = load_references()
+    first = rows[0]
+    exposure = auto_exposure(ref_rgb["clean"], first["distance"], first["elevation"])
+    scale = 4
+    h, w = first["distance"].shape
+    columns = [("reference (converged)", None)] + [
+        (f"{m} {STRIP_SPP[m]} spp", m) for m in ("reference", "asm", "physical")
+    ]
+    sheet = Image.new("RGB", (len(columns) * w * scale, len(LEVELS) * (h * scale + 14)), "black")
+    draw = ImageDraw.Draw(sheet)
+    for i, v in enumerate(LEVELS):
+        y0 = i * (h * scale + 14)
+        for j, (label, mode) in enumerate(columns):
+            if mode is None:
+                rgb = ref_rgb[f"v{int(v):04d}"]
+            else:
+                match = [r for r in rows if r["mode"] == mode and r["spp"] == STRIP_SPP[mode]]
+                if not match:
+                    continue
+                rgb = match[0]["images"][i]
+            tile = Image.fromarray(to_srgb8(rgb, exposure)).resize((w * scale, h * scale), 0)
+            sheet.paste(tile, (j * w * scale, y0 + 14))
+            draw.text((j * w * scale + 3, y0 + 1), f"{label}, V = {v:g} m", fill="white")
+    sheet.save(IMAGES / "bench_strip.png")
+
+
+def write_doc(table: list[dict], meta: dict) -> None:
+    import os
+    import platform
+
+    lv = meta["levels"]
+    lines = [
+        "## Speed versus error of the hazy-level modes (benchmark scene, 80×45)",
+        "",
+        f"Machine: {platform.machine()}, {len(os.sched_getaffinity(0))} vCPU. References: "
+        "Mitsuba `volpath`, "
+        + ", ".join(
+            f"{k} {d['spp']:,} spp (standard error {100 * d['relative_stderr']:.1f} % of mean)"
+            for k, d in sorted(lv.items())
+        )
+        + ". Error = mean absolute error / mean on luminance against the reference; the floor "
+        "is what a perfect renderer would score against that reference (its own noise). "
+        "'ref. time, same error' is the time `reference` would need for the same error above "
+        "the floor, and ×faster its ratio to the mode's time.",
+        "",
+        "| mode | spp | V (m) | s / level | clean s | peak MiB | all | sea | sky | vessel | "
+        "bias | floor | ×faster than reference |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in table:
+        speedup = r.get("reference_seconds_same_error", float("nan")) / r["seconds"]
+        lines.append(
+            f"| {r['mode']} | {r['spp']} | {r['level']:g} | {r['seconds']:.2f} | "
+            f"{r['clean_seconds']:.2f} | {r['peak_mib']:.0f} | {100 * r['all']:.1f} % | "
+            f"{100 * r['sea']:.1f} % | {100 * r['sky']:.1f} % | {100 * r['vessel']:.1f} % | "
+            f"{100 * r['bias']:+.1f} % | {100 * r['floor']:.1f} % | {speedup:,.0f} |"
+        )
+    lines += [
+        "",
+        "![speed versus error](images/bench_speed_error.png)",
+        "",
+        "![reference, asm and physical](images/bench_strip.png)",
+    ]
+    replace_section("modes", "\n".join(lines), "scripts/bench_modes.py")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="fewer sample counts")
+    parser.add_argument("--child", nargs=3, metavar=("MODE", "SPP", "OUT"), help=argparse.SUPPRESS)
+    parser.add_argument("--work", type=Path, default=ROOT / "out" / "bench-modes")
+    args = parser.parse_args()
+    if args.child:
+        child(args.child[0], int(args.child[1]), Path(args.child[2]))
+        return
+    args.work.mkdir(parents=True, exist_ok=True)
+    rows = run_configs(QUICK if args.quick else CONFIGS, args.work)
+    table = analyse(rows)
+    (args.work / "results.json").write_text(json.dumps(table, indent=2))
+    _, _, meta = load_references()
+    plot(table)
+    strip(rows)
+    write_doc(table, meta)
+    print((ROOT / "docs" / "benchmarks.md").read_text().split("<!-- modes:start")[1][:4000])
+
+
+if __name__ == "__main__":
+    main()
