@@ -126,9 +126,15 @@ def test_meta_reports_contrast_falling_with_visibility(dataset):
     for vessel in meta["vessels"]:
         levels = vessel["levels"]
         assert levels["v0300"]["beyond_visibility"] == (vessel["distance_m"] > 300)
-        # Koschmieder: |C| = t |J - A| / A shrinks as the haze thickens.
+        # Koschmieder: |C| = t |J - A| / A shrinks as the haze thickens. Checked for vessels
+        # within 1.5 km that stand out clearly in the clean image: the transmittance at 4 km
+        # (> 0.23) is then far above that at 300 m (< 3e-9). Farther or faint vessels have
+        # contrasts below the noise of 2 spp on a few pixels, and at 300 m the fog beside the
+        # waterline is itself up to ~20 % darker than the horizon sky (physical mode).
         contrasts = [levels[k]["apparent_contrast"] for k in ("v4000", "v0300")]
-        if None not in contrasts:
+        clean = levels["clean"]["apparent_contrast"]
+        strong = clean is not None and abs(clean) > 0.6
+        if None not in contrasts and vessel["distance_m"] < 1500.0 and strong:
             assert abs(contrasts[0]) > abs(contrasts[1])
 
 

@@ -447,7 +447,7 @@ class RenderSpec(_Spec):
     """How the scene is rendered."""
 
     mode: Literal["physical", "reference", "asm"] = Field(
-        "asm",
+        "physical",
         description="Hazy-level renderer: `physical` (seahaze's haze integrator: analytic "
         "transmittance, sun single scattering with shadow rays, tabulated multiple scattering), "
         "`reference` (Mitsuba volpath, slow and noisy) or `asm` (composite of the clean image, "
