@@ -40,9 +40,9 @@ REFS = ROOT / "assets" / "references" / "benchmark"
 IMAGES = ROOT / "docs" / "images"
 LEVELS = (300.0, 1000.0, 4000.0)
 CONFIGS: dict[str, tuple[int, ...]] = {
-    "reference": (16, 64, 256, 1024),
-    "asm": (64, 1024),
-    "physical": (4, 16, 64, 256, 1024),
+    "reference": (16, 64, 256),
+    "asm": (64,),
+    "physical": (4, 16, 64, 256),
 }
 QUICK: dict[str, tuple[int, ...]] = {"reference": (16, 64), "asm": (64,), "physical": (16, 64)}
 STRIP_SPP = {"reference": 64, "asm": 64, "physical": 64}
