@@ -1,4 +1,4 @@
-"""Scattering physics of the haze: phase function, slab geometry, spectral extinction.
+"""Scattering physics of the haze: phase function and slab geometry.
 
 Every haze formula outside :mod:`seahaze.visibility` (which owns ``sigma`` from ``V``) lives here,
 in numpy, so that the table builder, the integrator and the tests share one definition.
@@ -13,12 +13,6 @@ Slab geometry
     The haze is a layer ``bottom ≤ z ≤ top`` (metres), horizontally unbounded. A straight ray
     ``o + s·d`` is inside it for ``s`` in one interval; transmittance over a length ``ℓ`` of it is
     ``exp(−σ ℓ)`` (Beer–Lambert).
-
-Wavelength dependence (optional)
-    ``σ(λ) = σ₅₅₀ (λ / 550 nm)^−q`` with Kim's exponent ``q(V)`` (Kim, Kim & Kashani 2001, Proc.
-    SPIE 4214; the low-visibility revision of Kruse's law, Kruse et al. 1962): ``q = 1.6`` for
-    ``V > 50 km``, ``1.3`` for 6–50 km, ``0.16 V + 0.34`` for 1–6 km (V in km), ``V − 0.5`` for
-    0.5–1 km and ``0`` below 0.5 km (fog is grey).
 """
 
 from __future__ import annotations
@@ -26,11 +20,6 @@ from __future__ import annotations
 import numpy as np
 
 FOUR_PI = 4.0 * np.pi
-
-RGB_WAVELENGTHS_NM: tuple[float, float, float] = (610.0, 550.0, 465.0)
-"""Representative wavelengths (nm) of the R, G, B channels for spectral extinction (the
-dominant wavelengths of the sRGB primaries, rounded; G is the 550 nm of the visibility
-definition)."""
 
 
 def hg_phase(cos_theta: np.ndarray | float, g: float) -> np.ndarray:
@@ -84,23 +73,3 @@ def slab_interval(
     enter = np.where(flat, np.where(inside, 0.0, np.inf), np.minimum(s_bottom, s_top))
     leave = np.where(flat, np.where(inside, np.inf, -np.inf), np.maximum(s_bottom, s_top))
     return np.maximum(enter, 0.0), leave
-
-
-def kim_exponent(visibility_m: float) -> float:
-    """Kim's wavelength exponent ``q`` of aerosol extinction at visibility ``V`` (m)."""
-    v_km = visibility_m / 1000.0
-    if v_km > 50.0:
-        return 1.6
-    if v_km > 6.0:
-        return 1.3
-    if v_km > 1.0:
-        return 0.16 * v_km + 0.34
-    if v_km > 0.5:
-        return v_km - 0.5
-    return 0.0
-
-
-def spectral_extinction(sigma_550: float, visibility_m: float) -> np.ndarray:
-    """Extinction (1/m) in the R, G, B channels: ``σ₅₅₀ (λ/550)^−q(V)``."""
-    q = kim_exponent(visibility_m)
-    return sigma_550 * (np.asarray(RGB_WAVELENGTHS_NM) / 550.0) ** (-q)

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..scattering import slab_interval
 from ..spec import HazeSpec, RenderSpec
 from .mitsuba_scene import HAZE_BOTTOM_M, LoadedScene
 
@@ -195,19 +196,11 @@ def haze_path_length(geometry: GeometryPass, bottom_m: float, top_m: float) -> n
     A ray ends at its surface distance (``inf`` for the sky); only the part inside the layer
     attenuates. Exact for a straight ray and a horizontally unbounded layer.
     """
-    oz = float(geometry.origin[2])
-    dz = geometry.directions[..., 2].astype(np.float64)
-    end = geometry.distance_m.astype(np.float64)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s_bottom = (bottom_m - oz) / dz
-        s_top = (top_m - oz) / dz
-    flat = np.abs(dz) < 1e-12
-    inside_now = bottom_m <= oz <= top_m
-    enter = np.where(flat, 0.0 if inside_now else np.inf, np.minimum(s_bottom, s_top))
-    leave = np.where(flat, np.inf if inside_now else 0.0, np.maximum(s_bottom, s_top))
-    start = np.maximum(enter, 0.0)
-    stop = np.minimum(leave, end)
-    return np.maximum(stop - start, 0.0)
+    enter, leave = slab_interval(
+        float(geometry.origin[2]), geometry.directions[..., 2], bottom_m, top_m
+    )
+    stop = np.minimum(leave, geometry.distance_m.astype(np.float64))
+    return np.maximum(stop - enter, 0.0)
 
 
 def asm_level(
