@@ -33,7 +33,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
-from bench_passes import replace_section  # noqa: E402
+from bench_passes import proc_status_mib, replace_section  # noqa: E402
 
 SCENE = ROOT / "scenes" / "benchmark.yaml"
 REFS = ROOT / "assets" / "references" / "benchmark"
@@ -46,14 +46,6 @@ CONFIGS: dict[str, tuple[int, ...]] = {
 }
 QUICK: dict[str, tuple[int, ...]] = {"reference": (16, 64), "asm": (64,), "physical": (16, 64)}
 STRIP_SPP = {"reference": 64, "asm": 64, "physical": 64}
-
-
-def _peak_mib() -> float:
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024
-    return float("nan")
 
 
 def child(mode: str, spp: int, out: Path) -> None:
@@ -93,7 +85,7 @@ def child(mode: str, spp: int, out: Path) -> None:
         images=np.stack(images),
         seconds=np.array(seconds),
         clean_seconds=clean_s,
-        peak_mib=_peak_mib(),
+        peak_mib=proc_status_mib("VmHWM"),
         variant=variant,
         distance=geo.distance_m,
         instance=geo.instance,

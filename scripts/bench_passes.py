@@ -24,10 +24,11 @@ DOC = ROOT / "docs" / "benchmarks.md"
 PASSES = ("aov", "clean", "asm", "reference")
 
 
-def _rss_mib() -> float:
+def proc_status_mib(field: str = "VmRSS") -> float:
+    """A memory field of /proc/self/status in MiB (``VmRSS`` now, ``VmHWM`` the peak)."""
     with open("/proc/self/status") as f:
         for line in f:
-            if line.startswith("VmRSS:"):
+            if line.startswith(f"{field}:"):
                 return int(line.split()[1]) / 1024
     return float("nan")
 
@@ -54,7 +55,7 @@ def run_pass(name: str, res: tuple[int, int], spp: int, vis: float) -> dict:
     haze, sigma = spec.haze, extinction_coefficient(vis, spec.haze.threshold)
     geo = passes.render_geometry(loaded) if name == "asm" else None
     clean = passes.render_clean(loaded, spp, 0, haze.albedo, haze.g) if name == "asm" else None
-    rss_before = _rss_mib()
+    rss_before = proc_status_mib()
 
     def once(run: int) -> None:
         if name == "aov":

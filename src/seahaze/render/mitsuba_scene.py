@@ -149,7 +149,6 @@ class LoadedScene:
     camera: Camera
     box_half_width_m: float
     haze_top_m: float
-    camera_in_haze: bool
     shape_ids: dict[int, int]
     """Mitsuba shape registry id → vessel index (the sea and the haze box map to -1, -2)."""
     spec: SceneSpec | None = None
@@ -258,4 +257,4 @@ def build_scene(
         sid = shape.id()
         index = vessel_of_part.get(sid, -2 if sid == HAZE_BOX_ID else -1)
         shape_ids[shape_registry_id(shape)] = index
-    return LoadedScene(loaded, params, camera, half_width, top, inside, shape_ids, spec)
+    return LoadedScene(loaded, params, camera, half_width, top, shape_ids, spec)

@@ -17,6 +17,7 @@ Modes of a hazy level
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -123,11 +124,14 @@ def render_geometry(loaded: LoadedScene) -> GeometryPass:
     )
 
 
-def render_radiance(loaded: LoadedScene, spp: int, seed: int, sensor_index: int = 0) -> np.ndarray:
-    """Render linear RGB radiance (H, W, 3) float32 with the scene's current medium."""
+def render_radiance(
+    loaded: LoadedScene, spp: int, seed: int, sensor_index: int = 0, integrator: Any = None
+) -> np.ndarray:
+    """Render linear RGB radiance (H, W, 3) float32 with the scene's current medium, by the
+    scene's integrator or ``integrator`` (the physical mode's)."""
     import mitsuba as mi
 
-    image = mi.render(loaded.scene, sensor=sensor_index, spp=spp, seed=seed)
+    image = mi.render(loaded.scene, sensor=sensor_index, spp=spp, seed=seed, integrator=integrator)
     # Mitsuba 3.9's sunsky gives the sun a negative blue radiance below about 3 deg elevation
     # (RGB -58 for +3819 red: its reddened colour lies outside the sRGB gamut), so the sun, its
     # glint and sunlit pixels can come out negative in blue. Clipping at zero is the gamut clip

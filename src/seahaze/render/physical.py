@@ -371,12 +371,11 @@ class PhysicalRenderer:
         """Linear RGB radiance (H, W, 3) of one level."""
         import time
 
-        mi = _mi()
+        from .passes import render_radiance
+
         start = time.perf_counter()
         table = self.table(sigma, albedo, g, seed)
         table_seconds = time.perf_counter() - start
         self.integrator.set_level(sigma, albedo, g, table)
-        image = mi.render(self.loaded.scene, integrator=self.integrator, spp=spp, seed=seed)
-        # Clipped at zero like every pass: Mitsuba's low sun has a slightly negative blue.
-        radiance = np.maximum(np.array(image, dtype=np.float32), 0.0)
+        radiance = render_radiance(self.loaded, spp, seed, integrator=self.integrator)
         return radiance, PhysicalLevel(table, table_seconds)
