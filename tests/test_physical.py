@@ -3,9 +3,10 @@
 * The diffuse-field table against quadrature: thin haze under a uniform sky over a black sea
   scatters ``J(ω) = σ_s L₀ ∫_down p(ω·ω') dω'`` (single scattering of the sky), for any g.
 * The integrator against Mitsuba's ``volpath`` (a wholly independent estimator): sky and sea
-  means at V = 300 m and 1000 m within 3 % plus three combined standard errors.
-* Absorbing haze: the sky through the slab is the clean sky times ``exp(−σ L)`` (Beer–Lambert,
-  with ``L`` from the camera geometry, not from the integrator).
+  means per channel at V = 300 m and 1000 m, and at 2000 m with Kim's wavelength-dependent
+  extinction (Mitsuba's chromatic-medium sampling), within 3 % plus three standard errors.
+* Absorbing haze: the sky through the slab is the clean sky times ``exp(−σ_c L)`` in each
+  channel (Beer–Lambert, with ``L`` from the camera geometry, not from the integrator).
 * Determinism and kernel reuse across levels.
 """
 
@@ -15,12 +16,11 @@ import numpy as np
 import pytest
 
 from conftest import box_vessel, load_flat_scene, small_spec
-from seahaze import imaging
 from seahaze.render import passes
 from seahaze.render.diffuse_table import TableGrid, build_diffuse_table
 from seahaze.render.mitsuba_scene import HAZE_BOTTOM_M
 from seahaze.scattering import hg_phase
-from seahaze.visibility import extinction_coefficient
+from seahaze.visibility import channel_extinction
 
 pytestmark = pytest.mark.usefixtures("mitsuba_variant")
 
@@ -81,11 +81,13 @@ class _Scenes:
     def __init__(self) -> None:
         self.spec = small_spec(
             camera={"resolution": [48, 27], "fov_deg": 40.0, "pitch_deg": -3.0},
-            haze={"levels": [300.0, 1000.0]},
+            haze={"levels": [300.0, 1000.0, 2000.0]},
         )
         vessel = box_vessel(0, (400.0, 30.0, 6.0), (40.0, 8.0, 12.0))
-        self.reference, _ = load_flat_scene(self.spec, [vessel], (300.0, 1000.0))
-        self.physical, _ = load_flat_scene(self.spec, [vessel], (300.0, 1000.0), haze_box=False)
+        self.reference, _ = load_flat_scene(self.spec, [vessel], (300.0, 1000.0, 2000.0))
+        self.physical, _ = load_flat_scene(
+            self.spec, [vessel], (300.0, 1000.0, 2000.0), haze_box=False
+        )
         self.geo = passes.render_geometry(self.physical)
         self.clean = passes.render_clean(self.physical, 16, 1, 0.998, 0.75)
 
@@ -93,7 +95,7 @@ class _Scenes:
         spec = self.spec.haze.model_copy(update=haze)
         render = self.spec.render.model_copy(update={"spp": spp, "seed": seed})
         loaded = self.physical if mode == "physical" else self.reference
-        sigma = extinction_coefficient(visibility, spec.threshold)
+        sigma = channel_extinction(visibility, spec.threshold, spec.extinction_spectrum)
         return passes.render_level(mode, loaded, self.geo, self.clean, sigma, spec, render, 0)
 
 
@@ -102,18 +104,23 @@ def scenes() -> _Scenes:
     return _Scenes()
 
 
-@pytest.mark.parametrize("visibility", [300.0, 1000.0])
-def test_physical_matches_volpath_on_sky_and_sea(scenes: _Scenes, visibility: float) -> None:
+@pytest.mark.parametrize(
+    ("visibility", "spectrum"), [(300.0, "grey"), (1000.0, "grey"), (2000.0, "kim")]
+)
+def test_physical_matches_volpath_on_sky_and_sea(
+    scenes: _Scenes, visibility: float, spectrum: str
+) -> None:
     sky = np.isinf(scenes.geo.distance_m)
     sea = ~sky & (scenes.geo.instance < 0)
     assert sky.sum() > 200 and sea.sum() > 200
 
     def region_means(mode: str, spp: int) -> tuple[np.ndarray, np.ndarray]:
+        """Sky and sea means per channel, (2, 3), and their standard errors from 4 batches."""
         batches = [
-            imaging.luminance(scenes.level(mode, visibility, spp, seed).radiance)
+            scenes.level(mode, visibility, spp, seed, extinction_spectrum=spectrum).radiance
             for seed in range(4)
         ]
-        means = np.array([[b[sky].mean(), b[sea].mean()] for b in batches])
+        means = np.array([[b[sky].mean(axis=0), b[sea].mean(axis=0)] for b in batches])
         return means.mean(axis=0), means.std(axis=0, ddof=1) / 2.0
 
     ref, ref_se = region_means("reference", 256)
@@ -122,22 +129,27 @@ def test_physical_matches_volpath_on_sky_and_sea(scenes: _Scenes, visibility: fl
     assert np.all(np.abs(phys - ref) <= allowed), (visibility, phys, ref, allowed)
 
 
-def test_absorbing_haze_attenuates_the_sky_by_beer_lambert(scenes: _Scenes) -> None:
-    # V = 10 km, so that the upper sky rows see the layer at optical depths below 2.
-    level = scenes.level("physical", 10000.0, 16, 0, albedo=0.0).radiance
-    sigma = extinction_coefficient(10000.0, "koschmieder")
+@pytest.mark.parametrize("spectrum", ["grey", "kim"])
+def test_absorbing_haze_attenuates_the_sky_by_beer_lambert(scenes: _Scenes, spectrum: str) -> None:
+    # V = 10 km, so that the upper sky rows see the layer at optical depths below 2; there Kim's
+    # q = 1.3 makes blue's extinction 1.43 times red's.
+    level = scenes.level(
+        "physical", 10000.0, 16, 0, albedo=0.0, extinction_spectrum=spectrum
+    ).radiance
+    sigma = channel_extinction(10000.0, "koschmieder", spectrum)
     length = passes.haze_path_length(scenes.geo, HAZE_BOTTOM_M, scenes.spec.haze.top_m)
     # Sky pixels whose optical depth is below 2. Each pixel averages 16 random positions over
     # its 0.8° of elevation, across which exp(-σL) changes by up to 15 %: compare row means
-    # (48 pixels each) to the pixel-centre law, and the overall mean.
-    sky = np.isinf(scenes.geo.distance_m) & (sigma * length < 2.0)
+    # (48 pixels each) to the pixel-centre law, and the overall mean, channel by channel.
+    sky = np.isinf(scenes.geo.distance_m) & (sigma.max() * length < 2.0)
     assert sky.sum() > 100
-    expected = imaging.luminance(scenes.clean) * np.exp(-sigma * length)
-    got = imaging.luminance(level)
+    expected = scenes.clean * np.exp(-sigma[None, None, :] * length[..., None])
     rows = [r for r in range(sky.shape[0]) if sky[r].all()]
     assert len(rows) >= 3
-    np.testing.assert_allclose(got[rows].mean(axis=1), expected[rows].mean(axis=1), rtol=0.015)
-    assert abs(got[sky].mean() / expected[sky].mean() - 1.0) < 0.005
+    np.testing.assert_allclose(level[rows].mean(axis=1), expected[rows].mean(axis=1), rtol=0.015)
+    np.testing.assert_allclose(
+        level[sky].mean(axis=0) / expected[sky].mean(axis=0), 1.0, atol=0.005
+    )
 
 
 def test_physical_is_deterministic_and_reuses_its_kernel(scenes: _Scenes) -> None:
@@ -147,6 +159,8 @@ def test_physical_is_deterministic_and_reuses_its_kernel(scenes: _Scenes) -> Non
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     dr.kernel_history()  # clear
     b = scenes.level("physical", 300.0, 4, 9).radiance  # another level: new σ and table
+    # Per-channel extinction is a value too, not a new kernel.
+    scenes.level("physical", 2000.0, 4, 9, extinction_spectrum="kim")
     history = dr.kernel_history()
     dr.set_flag(dr.JitFlag.KernelHistory, False)
     c = scenes.level("physical", 1000.0, 4, 9).radiance

@@ -37,9 +37,13 @@ def test_distance_pass_equals_analytic_distance_to_plane():
     assert np.all(geo.instance == -1)
 
 
-def test_absorbing_medium_gives_beer_lambert_on_the_sky():
-    # Albedo 0: the sky seen through the layer is the clean sky times exp(-sigma L), L the
-    # path length inside the layer. The sun is switched off so the sky is the only emitter.
+@pytest.mark.parametrize(
+    "sigma", [1.0 / 1500.0, np.array([1.0 / 2000.0, 1.0 / 1500.0, 1.0 / 1000.0])]
+)
+def test_absorbing_medium_gives_beer_lambert_on_the_sky(sigma):
+    # Albedo 0: the sky seen through the layer is the clean sky times exp(-sigma_c L), L the
+    # path length inside the layer, per channel (a per-channel sigma is a chromatic medium for
+    # volpath). The sun is switched off so the sky is the only emitter.
     spec = small_spec(
         camera={"pitch_deg": 25.0, "resolution": [64, 36]},
         sun={"scale": 0.0},
@@ -47,16 +51,18 @@ def test_absorbing_medium_gives_beer_lambert_on_the_sky():
     )
     loaded, _ = load_flat_scene(spec, visibilities=(20000.0,))
     geo = passes.render_geometry(loaded)
-    sigma = 1.0 / 1500.0
     clean = passes.render_clean(loaded, 16, 1, 0.0, 0.0)
     hazy = passes.render_reference_level(loaded, sigma, 0.0, 0.0, 256, 1, 0)
     sky = np.isinf(geo.distance_m)
     assert sky.mean() > 0.9
-    t = np.exp(-sigma * passes.haze_path_length(geo, HAZE_BOTTOM_M, 300.0))[sky]
+    length = passes.haze_path_length(geo, HAZE_BOTTOM_M, 300.0)[sky]
+    t = np.exp(-np.asarray(sigma)[None, ...] * length[:, None]) * np.ones((1, 3))
     assert 0.2 < t.mean() < 0.9
-    expected = (clean[sky] * t[:, None]).sum(axis=0)
-    measured = hazy[sky].sum(axis=0)
-    np.testing.assert_allclose(measured, expected, rtol=0.01)
+    expected = (clean[sky] * t).sum(axis=0)
+    np.testing.assert_allclose(hazy[sky].sum(axis=0), expected, rtol=0.01)
+    # The ASM composite with no airlight is the same law, per channel.
+    asm = passes.asm_level(clean, geo, sigma, np.zeros(3), 300.0)
+    np.testing.assert_allclose(asm[sky].sum(axis=0), expected, rtol=1e-5)
 
 
 def test_haze_path_length_cases():

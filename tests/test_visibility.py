@@ -6,10 +6,13 @@ import numpy as np
 import pytest
 
 from seahaze.visibility import (
+    CHANNEL_WAVELENGTHS_NM,
     GRADED_LEVELS_M,
     REGULATION_CLASSES,
     VisSelectionError,
+    channel_extinction,
     extinction_coefficient,
+    kim_exponent,
     koschmieder_contrast,
     level_name,
     parse_vis_selection,
@@ -44,6 +47,57 @@ def test_inverse_round_trips():
 def test_extinction_rejects_bad_visibility(bad):
     with pytest.raises(ValueError):
         extinction_coefficient(bad)
+
+
+@pytest.mark.parametrize(
+    ("v_m", "q"),
+    # Kim, McArthur & Korevaar (2001), V in km: 0 (≤ 0.5), V − 0.5 (≤ 1), 0.16 V + 0.34 (≤ 6),
+    # 1.3 (≤ 50), 1.6 beyond.
+    [(50.0, 0.0), (300.0, 0.0), (500.0, 0.0), (800.0, 0.3), (1000.0, 0.5), (2000.0, 0.66),
+     (4000.0, 0.98), (6000.0, 1.3), (20e3, 1.3), (50e3, 1.3), (100e3, 1.6)],
+)  # fmt: skip
+def test_kim_exponent_follows_the_published_pieces(v_m, q):
+    assert kim_exponent(v_m) == pytest.approx(q, abs=1e-12)
+
+
+@pytest.mark.parametrize("edge_m", [500.0, 1000.0, 6000.0])
+def test_kim_exponent_is_continuous_where_the_paper_joins_pieces(edge_m):
+    below, above = kim_exponent(edge_m * (1 - 1e-9)), kim_exponent(edge_m * (1 + 1e-9))
+    assert below == pytest.approx(above, abs=1e-6)
+
+
+def _srgb_daylight_response() -> tuple[np.ndarray, np.ndarray]:
+    """Wavelengths (nm) and the linear-sRGB channels' response to D65 per nm, (n, 3): an
+    independent computation from colour-science's CIE 1931 tables and sRGB matrix."""
+    import colour
+
+    shape = colour.SpectralShape(360, 830, 1)
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape)
+    d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(shape)
+    to_rgb = colour.RGB_COLOURSPACES["sRGB"].matrix_XYZ_to_RGB
+    return cmfs.wavelengths, (cmfs.values @ to_rgb.T) * d65.values[:, None]
+
+
+@pytest.mark.parametrize("q", [0.5, 1.0, 1.3])
+def test_channel_wavelengths_match_the_mean_extinction_of_each_srgb_channel(q):
+    lam, response = _srgb_daylight_response()
+    mean = (response * ((lam / 550.0) ** -q)[:, None]).sum(axis=0) / response.sum(axis=0)
+    np.testing.assert_allclose(550.0 * mean ** (-1.0 / q), CHANNEL_WAVELENGTHS_NM, atol=2.0)
+
+
+@pytest.mark.parametrize("visibility_m", [800.0, 2000.0, 4000.0])
+def test_channel_transmittance_matches_the_band_integral(visibility_m):
+    # Daylight through haze, integrated over each channel's band, against exp(-sigma_c d) at
+    # the channel's wavelength, out to optical depth 2 (13.5 % transmittance at 550 nm).
+    lam, response = _srgb_daylight_response()
+    q = kim_exponent(visibility_m)
+    sigma550 = extinction_coefficient(visibility_m)
+    sigma_c = channel_extinction(visibility_m, "koschmieder", "kim")
+    for tau550 in (0.25, 1.0, 2.0):
+        d = tau550 / sigma550
+        spectral = np.exp(-sigma550 * (lam / 550.0) ** -q * d)
+        band = (response * spectral[:, None]).sum(axis=0) / response.sum(axis=0)
+        np.testing.assert_allclose(np.exp(-sigma_c * d), band, rtol=0.015)
 
 
 def test_graded_levels_are_the_papers_eleven():

@@ -27,7 +27,7 @@ from .render import passes
 from .render.mitsuba_scene import build_scene
 from .render.variant import select_variant
 from .spec import SceneSpec
-from .visibility import extinction_coefficient, level_name
+from .visibility import channel_extinction, extinction_coefficient, level_name
 
 Progress = Callable[[str], None]
 
@@ -185,7 +185,7 @@ def render_scene(
 
     level_meta = []
     for i, v in enumerate(levels):
-        sigma = extinction_coefficient(v, haze.threshold)
+        sigma = channel_extinction(v, haze.threshold, haze.extinction_spectrum)
         key = level_name(v)
         with _Timer(timings, f"level_{key}"):
             level = passes.render_level(
@@ -201,7 +201,8 @@ def render_scene(
         entry: dict[str, Any] = {
             "name": key,
             "visibility_m": v,
-            "sigma_per_m": sigma,
+            "sigma_per_m": extinction_coefficient(v, haze.threshold),
+            "sigma_rgb_per_m": sigma.tolist(),
             "horizon_luminance": horizon,
         }
         if airlight is not None:

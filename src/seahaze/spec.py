@@ -13,7 +13,7 @@ from typing import Annotated, Any, Literal, get_args
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 from pydantic.fields import FieldInfo
 
-from .visibility import GRADED_LEVELS_M, Threshold
+from .visibility import GRADED_LEVELS_M, ExtinctionSpectrum, Threshold
 
 BOUND_KINDS = ("ge", "gt", "le", "lt")
 """The numeric constraints a field may carry, as pydantic names them."""
@@ -399,6 +399,13 @@ class HazeSpec(_Spec):
         Threshold.KOSCHMIEDER,
         description="Contrast threshold linking visibility to extinction: `koschmieder` (2 %, "
         "sigma = 3.912/V) or `mor` (5 %, sigma = 2.996/V).",
+    )
+    extinction_spectrum: ExtinctionSpectrum = Field(
+        ExtinctionSpectrum.GREY,
+        description="Wavelength dependence of the extinction: `grey` (the same sigma in R, G and "
+        "B, as in the MSVD paper) or `kim` (sigma550 · (λ/550 nm)^-q per channel with Kim's "
+        "q(V): grey in fog at V ≤ 500 m, up to q = 0.98 at 4000 m, so distant objects redden "
+        "and the haze turns bluish). The visibility label stays defined at 550 nm.",
     )
     albedo: float = Field(
         0.998,

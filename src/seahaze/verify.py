@@ -50,6 +50,7 @@ from .spec import RenderSpec, SceneSpec
 from .visibility import (
     CONTRAST_THRESHOLD,
     Threshold,
+    channel_extinction,
     extinction_coefficient,
     level_name,
     visibility_from_extinction,
@@ -545,7 +546,7 @@ def render_level_batches(
     )
     geo = passes.render_geometry(loaded)
     distances = _check_target_pixels(geo, targets)
-    sigma = extinction_coefficient(visibility_m, haze.threshold)
+    sigma = channel_extinction(visibility_m, haze.threshold, haze.extinction_spectrum)
     spp = max(1, spec.render.spp // batches)
     clean = passes.render_clean(loaded, spp, spec.render.seed, haze.albedo, haze.g)
     lum, total = [], np.zeros((camera.height, camera.width, 3))

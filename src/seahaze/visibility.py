@@ -15,6 +15,17 @@ Extinction from visibility (Koschmieder's law)
 
     Both are defined at 550 nm. seahaze never mixes them: a dataset records its convention.
 
+Wavelength-dependent extinction (optional)
+    Haze extinction falls with wavelength as ``sigma(λ) = sigma550 · (λ / 550 nm)^-q``. Kim's
+    size-distribution exponent ``q(V)`` (Kim, McArthur & Korevaar 2001, "Comparison of laser
+    beam propagation at 785 nm and 1550 nm in fog and haze for optical wireless
+    communications", Proc. SPIE 4214, 26–37; V in km): 1.6 for V > 50, 1.3 for 6 < V ≤ 50,
+    0.16 V + 0.34 for 1 < V ≤ 6, V − 0.5 for 0.5 < V ≤ 1, 0 for V ≤ 0.5 (fog is grey). Each RGB
+    channel takes the extinction at its effective wavelength (647, 544, 443 nm): the wavelength
+    whose extinction is the mean extinction over the channel's response to daylight, so that
+    the channel's transmittance is right to first order in the optical depth. The label V
+    stays defined at 550 nm.
+
 Graded levels
     The 11 levels (m) of the MSVD paper, Table 2: 300 400 500 800 1000 1300 1600 2000 2500 3000
     4000.
@@ -34,6 +45,15 @@ from enum import StrEnum
 
 import numpy as np
 
+REFERENCE_WAVELENGTH_NM = 550.0
+"""Wavelength (nm) at which visibility and the extinction ``sigma = -ln(eps) / V`` are defined."""
+
+CHANNEL_WAVELENGTHS_NM: tuple[float, float, float] = (647.0, 544.0, 443.0)
+"""Effective wavelengths (nm) of the linear-sRGB R, G, B channels for haze extinction:
+``λ_c = 550 · <(λ/550)^-q>_c^(-1/q)``, the mean over the channel's spectral response to D65
+daylight (CIE 1931 2° colour-matching functions → linear sRGB, IEC 61966-2-1). Computed with
+colour-science at q = 1; they move by under 2 nm over q = 0.5 … 1.3 (tests/test_visibility.py)."""
+
 GRADED_LEVELS_M: tuple[int, ...] = (300, 400, 500, 800, 1000, 1300, 1600, 2000, 2500, 3000, 4000)
 """The MSVD graded visibility levels in metres (paper, Table 2)."""
 
@@ -43,6 +63,15 @@ class Threshold(StrEnum):
 
     KOSCHMIEDER = "koschmieder"
     MOR = "mor"
+
+
+class ExtinctionSpectrum(StrEnum):
+    """How the haze extinction depends on wavelength."""
+
+    GREY = "grey"
+    """The same extinction ``sigma550`` in every channel (the MSVD convention)."""
+    KIM = "kim"
+    """``sigma550 · (λ / 550)^-q(V)`` per channel, with Kim's ``q(V)``."""
 
 
 CONTRAST_THRESHOLD: dict[Threshold, float] = {
@@ -66,6 +95,45 @@ def extinction_coefficient(
         raise ValueError(f"visibility must be a finite positive distance in metres, got {v}")
     sigma = -math.log(eps) / v
     return float(sigma) if sigma.ndim == 0 else sigma
+
+
+def kim_exponent(visibility_m: float) -> float:
+    """Kim's wavelength exponent ``q`` (dimensionless) for a visibility ``V`` in metres.
+
+    Piecewise in ``V`` (km): 1.6 above 50, 1.3 above 6, ``0.16 V + 0.34`` above 1, ``V − 0.5``
+    above 0.5, else 0 (Kim, McArthur & Korevaar 2001). Continuous except at 50 km.
+    """
+    if not math.isfinite(visibility_m) or visibility_m <= 0:
+        raise ValueError(
+            f"visibility must be a finite positive distance in metres, got {visibility_m}"
+        )
+    v_km = visibility_m / 1000.0
+    if v_km > 50.0:
+        return 1.6
+    if v_km > 6.0:
+        return 1.3
+    if v_km > 1.0:
+        return 0.16 * v_km + 0.34
+    if v_km > 0.5:
+        return v_km - 0.5
+    return 0.0
+
+
+def channel_extinction(
+    visibility_m: float,
+    threshold: Threshold | str = Threshold.KOSCHMIEDER,
+    spectrum: ExtinctionSpectrum | str = ExtinctionSpectrum.GREY,
+) -> np.ndarray:
+    """Extinction coefficients (1/m) of the R, G, B channels, shape (3,), for visibility ``V``.
+
+    ``grey``: ``sigma550`` in all three. ``kim``: ``sigma550 · (λ_c / 550)^-q(V)`` at the
+    channels' effective wavelengths :data:`CHANNEL_WAVELENGTHS_NM`.
+    """
+    sigma550 = extinction_coefficient(visibility_m, threshold)
+    if ExtinctionSpectrum(spectrum) is ExtinctionSpectrum.GREY:
+        return np.full(3, sigma550)
+    ratio = np.asarray(CHANNEL_WAVELENGTHS_NM) / REFERENCE_WAVELENGTH_NM
+    return sigma550 * ratio ** -kim_exponent(visibility_m)
 
 
 def visibility_from_extinction(

@@ -252,7 +252,10 @@ def build_diffuse_table(
 
     fluence = tally.fluence()  # (n_z, n_dir, 3)
     p = phase_matrix(float(g), grid)
-    j = albedo * sigma * np.einsum("ij,zjc->zic", p, fluence)
+    # One BLAS product over all heights and channels (an einsum here took 60 % of the build).
+    n_z, n_dir, _ = fluence.shape
+    stacked = fluence.transpose(1, 0, 2).reshape(n_dir, n_z * 3)
+    j = albedo * sigma * (p @ stacked).reshape(n_dir, n_z, 3).transpose(1, 0, 2)
     values = j.reshape(grid.n_z, grid.n_mu, grid.n_phi, 3).astype(np.float32)
     return DiffuseTable(np.maximum(values, 0.0), top_m, sun_azimuth_rad, len(weights), flights)
 

@@ -20,7 +20,7 @@ import numpy as np
 from ..camera import Camera
 from ..geometry import MeshData, SceneGeometry
 from ..spec import SceneSpec
-from ..visibility import extinction_coefficient
+from ..visibility import ExtinctionSpectrum, channel_extinction
 
 HAZE_ID = "haze"
 HAZE_BOX_ID = "haze_box"
@@ -46,10 +46,23 @@ def sun_direction(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
     return np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)])
 
 
-def haze_box_half_width(visibilities_m: list[float], threshold: str) -> float:
-    """Horizontal half-width (m) of the haze box so that ``sigma * W >= 8`` at every level."""
-    sigma_min = min(extinction_coefficient(v, threshold) for v in visibilities_m)
-    return BOX_OPTICAL_HALF_WIDTH / sigma_min
+def haze_box_half_width(
+    visibilities_m: list[float],
+    threshold: str,
+    spectrum: ExtinctionSpectrum | str = ExtinctionSpectrum.GREY,
+) -> float:
+    """Horizontal half-width (m) of the haze box so that ``sigma * W >= 8`` at every level, in
+    the channel of least extinction."""
+    sigma_min = min(channel_extinction(v, threshold, spectrum).min() for v in visibilities_m)
+    return BOX_OPTICAL_HALF_WIDTH / float(sigma_min)
+
+
+def extinction_rgb(sigma_t: float | np.ndarray) -> np.ndarray:
+    """Per-channel extinction (3,) in 1/m from one grey value or an (R, G, B) triple."""
+    rgb = np.broadcast_to(np.asarray(sigma_t, dtype=float), (3,)).copy()
+    if not np.all(np.isfinite(rgb)) or np.any(rgb < 0.0):
+        raise ValueError(f"extinction must be finite and non-negative, got {rgb}")
+    return rgb
 
 
 def _sensor_dict(
@@ -161,13 +174,15 @@ class LoadedScene:
         """Whether the scene holds the Mitsuba haze medium (not so for the physical mode)."""
         return f"{HAZE_ID}.sigma_t.value.value" in self.params
 
-    def set_haze(self, sigma_t: float, albedo: float, g: float) -> None:
-        """Change the medium in place (no reload, no recompilation)."""
+    def set_haze(self, sigma_t: float | np.ndarray, albedo: float, g: float) -> None:
+        """Change the medium in place (no reload, no recompilation); ``sigma_t`` (1/m) is grey
+        or per channel (R, G, B)."""
+        rgb = extinction_rgb(sigma_t)
         if not self.has_haze_box:
-            if sigma_t > 0.0:
+            if rgb.max() > 0.0:
                 raise ValueError("this scene was loaded without a haze box (haze_box=False)")
             return
-        self.params[f"{HAZE_ID}.sigma_t.value.value"] = sigma_t
+        self.params[f"{HAZE_ID}.sigma_t.value.value"] = _mi().Color3f(*(float(c) for c in rgb))
         self.params[f"{HAZE_ID}.albedo.value.value"] = albedo
         self.params[f"{HAZE_ID}.phase_function.g"] = g
         self.params.update()
@@ -200,14 +215,17 @@ def build_scene(
     """
     mi = _mi()
     top = spec.haze.top_m
-    half_width = haze_box_half_width(visibilities_m or [1.0e4], spec.haze.threshold)
+    half_width = haze_box_half_width(
+        visibilities_m or [1.0e4], spec.haze.threshold, spec.haze.extinction_spectrum
+    )
     inside = camera.height_m < top and haze_box
     scene: dict[str, Any] = {
         "type": "scene",
         "integrator": {"type": "volpath", "max_depth": spec.render.max_depth, "rr_depth": 8},
         HAZE_ID: {
             "type": "homogeneous",
-            "sigma_t": 0.0,
+            # RGB so that the extinction may differ per channel (haze.extinction_spectrum).
+            "sigma_t": {"type": "rgb", "value": [0.0, 0.0, 0.0]},
             "albedo": spec.haze.albedo,
             "phase": {"type": "hg", "g": spec.haze.g},
         },

@@ -23,7 +23,10 @@ import numpy as np
 
 from ..scattering import slab_interval
 from ..spec import HazeSpec, RenderSpec
-from .mitsuba_scene import HAZE_BOTTOM_M, LoadedScene
+from .mitsuba_scene import HAZE_BOTTOM_M, LoadedScene, extinction_rgb
+
+Extinction = float | np.ndarray
+"""A level's extinction in 1/m: one grey value or (R, G, B) (``haze.extinction_spectrum``)."""
 
 GEOMETRY_MAX_CROSSINGS = 16
 """Surfaces a pixel ray walks through: the haze box (twice at most) and vessels behind vessels."""
@@ -147,7 +150,7 @@ def render_clean(loaded: LoadedScene, spp: int, seed: int, albedo: float, g: flo
 
 def render_reference_level(
     loaded: LoadedScene,
-    sigma: float,
+    sigma: Extinction,
     albedo: float,
     g: float,
     spp: int,
@@ -173,7 +176,7 @@ AIRLIGHT_BATCHES = 4
 
 def render_airlight(
     loaded: LoadedScene,
-    sigma: float,
+    sigma: Extinction,
     albedo: float,
     g: float,
     spp: int,
@@ -208,11 +211,16 @@ def haze_path_length(geometry: GeometryPass, bottom_m: float, top_m: float) -> n
 
 
 def asm_level(
-    clean: np.ndarray, geometry: GeometryPass, sigma: float, airlight_rgb: np.ndarray, top_m: float
+    clean: np.ndarray,
+    geometry: GeometryPass,
+    sigma: Extinction,
+    airlight_rgb: np.ndarray,
+    top_m: float,
 ) -> np.ndarray:
-    """Hazy radiance by the atmospheric scattering model ``I = J t + A (1 - t)``."""
+    """Hazy radiance by the atmospheric scattering model ``I = J t + A (1 - t)``, with
+    ``t = exp(-sigma_c L)`` per channel."""
     length = haze_path_length(geometry, HAZE_BOTTOM_M, top_m)
-    t = np.exp(-sigma * length)[..., None]
+    t = np.exp(-extinction_rgb(sigma)[None, None, :] * length[..., None])
     return (clean * t + airlight_rgb[None, None, :] * (1.0 - t)).astype(np.float32)
 
 
@@ -231,12 +239,13 @@ def render_level(
     loaded: LoadedScene,
     geometry: GeometryPass,
     clean: np.ndarray,
-    sigma: float,
+    sigma: Extinction,
     haze: HazeSpec,
     render: RenderSpec,
     level_index: int,
 ) -> LevelRender:
-    """Render one hazy level of extinction ``sigma`` (1/m) in ``mode`` (physical/reference/asm).
+    """Render one hazy level of extinction ``sigma`` (1/m, grey or per channel R, G, B) in
+    ``mode`` (physical/reference/asm).
 
     The single entry point for every caller (pipeline, verify, benchmarks), so a mode behaves
     the same everywhere. ``clean`` and ``geometry`` are the scene's clean and geometry passes.

@@ -29,7 +29,7 @@ kernel is compiled once per scene size and reused at every level.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -37,7 +37,7 @@ import numpy as np
 from ..scattering import FOUR_PI
 from ..spec import SceneSpec
 from .diffuse_table import DEFAULT_GRID, DiffuseTable, TableGrid, build_diffuse_table
-from .mitsuba_scene import HAZE_BOTTOM_M, LoadedScene, sunsky_dict
+from .mitsuba_scene import HAZE_BOTTOM_M, LoadedScene, extinction_rgb, sunsky_dict
 
 DEFAULT_BOUNCES = 3
 """Surface interactions per camera path: sea → sky, vessel → sea → sky. Measured on the
@@ -161,7 +161,7 @@ def make_integrator(
             self.sun = sun
             self.top = top_m
             self.bottom = HAZE_BOTTOM_M
-            self.sigma = mi.Float(0.0)
+            self.sigma = mi.Color3f(0.0)
             self.albedo = mi.Float(1.0)
             self.g = mi.Float(0.0)
             self.table = mi.Texture3f(
@@ -172,9 +172,12 @@ def make_integrator(
             )
             self.sun_azimuth = mi.Float(0.0)
 
-        def set_level(self, sigma: float, albedo: float, g: float, table: DiffuseTable) -> None:
-            """Point the integrator at a level without changing its compiled kernel."""
-            self.sigma = dr.opaque(mi.Float, sigma)
+        def set_level(
+            self, sigma: np.ndarray, albedo: float, g: float, table: DiffuseTable
+        ) -> None:
+            """Point the integrator at a level without changing its compiled kernel; ``sigma``
+            is the (R, G, B) extinction in 1/m."""
+            self.sigma = mi.Color3f(*(dr.opaque(mi.Float, float(c)) for c in sigma))
             self.albedo = dr.opaque(mi.Float, albedo)
             self.g = dr.opaque(mi.Float, g)
             self.sun_azimuth = dr.opaque(mi.Float, table.sun_azimuth_rad)
@@ -245,6 +248,9 @@ def make_integrator(
             prev_delta = mi.Bool(True)
             sigma = self.sigma
             sigma_s = self.albedo * sigma
+            # Distances are sampled in green (the channel nearest 550 nm); the other channels
+            # are reweighted by exp(-(σ_c - σ_g) s), which is 1 for grey haze.
+            sigma_g = sigma.y
             ctx = mi.BSDFContext()
 
             for depth in range(self.bounces + 1):
@@ -253,25 +259,26 @@ def make_integrator(
                 t_end = dr.select(si.is_valid(), si.t, dr.inf)
                 enter, leave = self.slab(ray.o.z, ray.d.z)
                 length = dr.maximum(dr.minimum(leave, t_end) - enter, 0.0)
-                tau = sigma * length
-                transmittance = dr.exp(-tau)
-                in_medium = active & (length > 0.0) & (sigma > 0.0)
+                transmittance = dr.exp(-sigma * length)
+                tau = sigma_g * length
+                in_medium = active & (length > 0.0) & (sigma_g > 0.0)
 
-                # In-scattering along the segment: distances ∝ transmittance, stratified, several
-                # on the camera segment where most of the haze is seen.
-                one_minus = dr.select(tau < 1e-3, tau * (1.0 - 0.5 * tau), 1.0 - transmittance)
+                # In-scattering along the segment: distances ∝ green transmittance, stratified,
+                # several on the camera segment where most of the haze is seen.
+                one_minus = dr.select(tau < 1e-3, tau * (1.0 - 0.5 * tau), 1.0 - dr.exp(-tau))
                 integral = dr.select(
-                    tau < 1e-3, length * (1.0 - 0.5 * tau), one_minus / dr.maximum(sigma, 1e-30)
+                    tau < 1e-3, length * (1.0 - 0.5 * tau), one_minus / dr.maximum(sigma_g, 1e-30)
                 )
                 n_points = self.camera_points if depth == 0 else 1
                 for k in range(n_points):
                     u = (k + sampler.next_1d(in_medium)) / n_points
-                    s = enter - dr.log(dr.maximum(1.0 - u * one_minus, 1e-30)) / dr.maximum(
-                        sigma, 1e-30
+                    depth_in = -dr.log(dr.maximum(1.0 - u * one_minus, 1e-30)) / dr.maximum(
+                        sigma_g, 1e-30
                     )
-                    x = ray(dr.minimum(s, enter + length))
+                    x = ray(dr.minimum(enter + depth_in, enter + length))
                     inscatter = self.inscatter(scene, sampler, x, ray, sigma_s, in_medium)
-                    result += dr.select(in_medium, beta * (integral / n_points) * inscatter, 0.0)
+                    weight = (integral / n_points) * dr.exp(-(sigma - sigma_g) * depth_in)
+                    result += dr.select(in_medium, beta * weight * inscatter, 0.0)
 
                 # The sky (or sun) at the end of an escaping segment, with MIS against the
                 # emitter sampling of the surface it left.
@@ -354,21 +361,43 @@ class PhysicalRenderer:
         self._reflect = SeaReflector(_sea_bsdf(loaded.scene))
 
     def table(
-        self, sigma: float, albedo: float, g: float, seed: int, grid: TableGrid = DEFAULT_GRID
+        self,
+        sigma: float | np.ndarray,
+        albedo: float,
+        g: float,
+        seed: int,
+        grid: TableGrid = DEFAULT_GRID,
     ) -> DiffuseTable:
-        """The diffuse-field table of one level."""
+        """The diffuse-field table of one level; ``sigma`` (1/m) grey or per channel (R, G, B).
+
+        Channels of different extinction get a table each, from the same photons (so their
+        noise is correlated and the table's colour stays smooth); a grey level needs one.
+        """
+        rgb = extinction_rgb(sigma)
         top = self.loaded.haze_top_m
         half = self.photons // 2
         sun = emitter_photons(self.sun, half, seed, top)
         sky = emitter_photons(self.sky, half, seed + 1, top)
-        return build_diffuse_table(
-            sun, sky, self._reflect, sigma, albedo, g, top, self.sun_azimuth_rad, seed, grid
+        tables = {
+            value: build_diffuse_table(
+                sun, sky, self._reflect, value, albedo, g, top, self.sun_azimuth_rad, seed, grid
+            )
+            for value in dict.fromkeys(float(c) for c in rgb)
+        }
+        if len(tables) == 1:
+            return next(iter(tables.values()))
+        per_channel = [tables[float(c)] for c in rgb]
+        values = np.stack([t.values[..., c] for c, t in enumerate(per_channel)], axis=-1)
+        return replace(
+            per_channel[1],
+            values=values,
+            flights=max(t.flights for t in per_channel),
         )
 
     def render(
-        self, sigma: float, albedo: float, g: float, spp: int, seed: int
+        self, sigma: float | np.ndarray, albedo: float, g: float, spp: int, seed: int
     ) -> tuple[np.ndarray, PhysicalLevel]:
-        """Linear RGB radiance (H, W, 3) of one level."""
+        """Linear RGB radiance (H, W, 3) of one level; ``sigma`` as in :meth:`table`."""
         import time
 
         from .passes import render_radiance
@@ -376,6 +405,6 @@ class PhysicalRenderer:
         start = time.perf_counter()
         table = self.table(sigma, albedo, g, seed)
         table_seconds = time.perf_counter() - start
-        self.integrator.set_level(sigma, albedo, g, table)
+        self.integrator.set_level(extinction_rgb(sigma), albedo, g, table)
         radiance = render_radiance(self.loaded, spp, seed, integrator=self.integrator)
         return radiance, PhysicalLevel(table, table_seconds)
