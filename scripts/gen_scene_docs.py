@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import inspect
 import sys
+from enum import Enum
 from pathlib import Path
 from typing import Any
 
@@ -92,8 +93,8 @@ def _type_name(annotation: Any) -> str:
             + ", ".join(f"`{a}`" for a in getattr(annotation, "__args__", ()) if isinstance(a, str))
             or text
         )
-    if "Threshold" in text:
-        return "one of `koschmieder`, `mor`"
+    if isinstance(annotation, type) and issubclass(annotation, Enum):
+        return "one of " + ", ".join(f"`{member.value}`" for member in annotation)
     if "tuple[" in text and "float" in text:
         return "list of numbers"
     if "tuple[" in text and "int" in text:

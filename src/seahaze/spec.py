@@ -404,8 +404,8 @@ class HazeSpec(_Spec):
         ExtinctionSpectrum.GREY,
         description="Wavelength dependence of the extinction: `grey` (the same sigma in R, G and "
         "B, as in the MSVD paper) or `kim` (sigma550 · (λ/550 nm)^-q per channel with Kim's "
-        "q(V): grey in fog at V ≤ 500 m, up to q = 0.98 at 4000 m, so distant objects redden "
-        "and the haze turns bluish). The visibility label stays defined at 550 nm.",
+        "q(V): grey in fog at V ≤ 500 m, up to q = 0.98 at 4000 m; distant objects redden). "
+        "The visibility label stays defined at 550 nm; see docs/physics.md.",
     )
     albedo: float = Field(
         0.998,

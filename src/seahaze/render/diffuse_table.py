@@ -87,7 +87,8 @@ def direction_bins(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(μ bin, folded azimuth bin) of unit travel directions ``d`` (n, 3)."""
     mu_bin = np.clip(((d[:, 2] + 1.0) * 0.5 * n_mu).astype(np.int64), 0, n_mu - 1)
-    phi = np.abs(np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) - sun_azimuth))))
+    # Azimuth from the sun wrapped into [-π, π), then folded into [0, π].
+    phi = np.abs((np.arctan2(d[:, 1], d[:, 0]) - sun_azimuth + np.pi) % (2.0 * np.pi) - np.pi)
     phi_bin = np.clip((phi / np.pi * n_phi).astype(np.int64), 0, n_phi - 1)
     return mu_bin, phi_bin
 
@@ -146,16 +147,18 @@ class _TrackTally:
         # probability ~1e-6 and its length in the bin is underestimated at worst.
         mu = np.abs(d[:, 2])
         c = w / np.maximum(mu, 1e-6)[:, None]
-        lo, hi = np.minimum(z0, z1), np.maximum(z0, z1)
-        for z, sign in ((hi, 1.0), (lo, -1.0)):
-            z = np.clip(z, 0.0, self.top)
-            zb = np.minimum((z / self.dz).astype(np.int64), g.n_z - 1)
-            key = zb * g.n_dir + dir_bin
-            frac = z - zb * self.dz
-            for ch in range(3):
-                n = self.full.shape[0]
-                self.full[:, ch] += sign * np.bincount(key, c[:, ch], minlength=n)
-                self.partial[:, ch] += sign * np.bincount(key, c[:, ch] * frac, minlength=n)
+        # The upper end adds A_b(z_hi), the lower end subtracts A_b(z_lo): both ends in one
+        # bincount per accumulator, over flat (bin, channel) indices.
+        z = np.clip(np.concatenate([np.maximum(z0, z1), np.minimum(z0, z1)]), 0.0, self.top)
+        zb = np.minimum((z / self.dz).astype(np.int64), g.n_z - 1)
+        key = (zb * g.n_dir + np.concatenate([dir_bin, dir_bin]))[:, None] * 3 + np.arange(3)
+        signed = np.concatenate([c, -c])
+        frac = (z - zb * self.dz)[:, None]
+        size = self.full.size
+        self.full += np.bincount(key.ravel(), signed.ravel(), size).reshape(self.full.shape)
+        self.partial += np.bincount(key.ravel(), (signed * frac).ravel(), size).reshape(
+            self.partial.shape
+        )
 
     def fluence(self) -> np.ndarray:
         """Directional fluence ``Φ[z, dir, rgb]`` (W m⁻²), the track length per bin height."""
