@@ -361,6 +361,27 @@ def test_a_changed_config_is_refused_unless_forced(template, reference, tmp_path
     assert set(_statuses(out).values()) == {"done"}
 
 
+def test_a_manifest_without_a_field_added_since_resumes(template, reference, tmp_path, capsys):
+    # A folder written before haze.extinction_spectrum existed: the field at its default keeps
+    # the old behaviour, so the folder resumes without --force and nothing is re-rendered.
+    out = tmp_path / "older"
+    shutil.copytree(reference, out)
+    manifest = _manifest(out)
+    for entry in manifest["scenes"].values():
+        del entry["config"]["haze"]["extinction_spectrum"]
+    (out / "dataset.json").write_text(json.dumps(manifest, indent=2) + "\n")
+    clean = out / "images" / "clean" / "tiny_00000.png"
+    stamp = clean.stat().st_mtime_ns
+    assert _render(template, out) == 0, capsys.readouterr().err
+    assert clean.stat().st_mtime_ns == stamp
+    # The same field set to another value is a real change.
+    manifest = _manifest(out)
+    manifest["scenes"]["tiny_00000"]["config"]["haze"]["extinction_spectrum"] = "kim"
+    (out / "dataset.json").write_text(json.dumps(manifest, indent=2) + "\n")
+    assert _render(template, out) == 2
+    assert "config.haze.extinction_spectrum" in capsys.readouterr().err
+
+
 def test_a_full_disk_stops_cleanly_and_keeps_finished_scenes(
     template, reference, tmp_path, monkeypatch, capsys
 ):

@@ -777,6 +777,26 @@ def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
     return {prefix: data}
 
 
+def _with_current_defaults(existing: dict[str, Any]) -> dict[str, Any]:
+    """The folder's manifest with each scene's recorded config re-validated by this version's
+    schema, so a field added since (at its default, which keeps the old behaviour) is not a
+    change. A config that no longer validates is kept as recorded: it differs for real."""
+    scenes = existing.get("scenes")
+    if not isinstance(scenes, dict):
+        return existing
+    upgraded = {}
+    for name, entry in scenes.items():
+        config = entry.get("config") if isinstance(entry, dict) else None
+        if isinstance(config, dict):
+            try:
+                config = SceneSpec.model_validate(config).model_dump(mode="json", by_alias=True)
+                entry = {**entry, "config": config}
+            except ValueError:
+                pass
+        upgraded[name] = entry
+    return {**existing, "scenes": upgraded}
+
+
 def _differences(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
     """Human lines for what differs between a folder's manifest and the planned one."""
     lines = []
@@ -945,6 +965,8 @@ class _Batch:
         """Check the folder against the plan, clean it up, and find the scenes still to render."""
         planned = self.manifest()
         existing = _read_manifest(self.layout.manifest, force)
+        if existing is not None:
+            existing = _with_current_defaults(existing)
         changes = _differences(existing, planned) if existing is not None else []
         if changes and not force:
             shown = "\n  ".join(changes[:6])
