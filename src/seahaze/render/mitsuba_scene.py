@@ -57,7 +57,11 @@ def haze_box_half_width(
     return BOX_OPTICAL_HALF_WIDTH / float(sigma_min)
 
 
-def extinction_rgb(sigma_t: float | np.ndarray) -> np.ndarray:
+Extinction = float | np.ndarray
+"""A level's extinction in 1/m: one grey value or (R, G, B) (``haze.extinction_spectrum``)."""
+
+
+def extinction_rgb(sigma_t: Extinction) -> np.ndarray:
     """Per-channel extinction (3,) in 1/m from one grey value or an (R, G, B) triple."""
     rgb = np.broadcast_to(np.asarray(sigma_t, dtype=float), (3,)).copy()
     if not np.all(np.isfinite(rgb)) or np.any(rgb < 0.0):
@@ -174,7 +178,7 @@ class LoadedScene:
         """Whether the scene holds the Mitsuba haze medium (not so for the physical mode)."""
         return f"{HAZE_ID}.sigma_t.value.value" in self.params
 
-    def set_haze(self, sigma_t: float | np.ndarray, albedo: float, g: float) -> None:
+    def set_haze(self, sigma_t: Extinction, albedo: float, g: float) -> None:
         """Change the medium in place (no reload, no recompilation); ``sigma_t`` (1/m) is grey
         or per channel (R, G, B)."""
         rgb = extinction_rgb(sigma_t)

@@ -23,10 +23,7 @@ import numpy as np
 
 from ..scattering import slab_interval
 from ..spec import HazeSpec, RenderSpec
-from .mitsuba_scene import HAZE_BOTTOM_M, LoadedScene, extinction_rgb
-
-Extinction = float | np.ndarray
-"""A level's extinction in 1/m: one grey value or (R, G, B) (``haze.extinction_spectrum``)."""
+from .mitsuba_scene import HAZE_BOTTOM_M, Extinction, LoadedScene, extinction_rgb
 
 GEOMETRY_MAX_CROSSINGS = 16
 """Surfaces a pixel ray walks through: the haze box (twice at most) and vessels behind vessels."""

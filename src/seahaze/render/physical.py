@@ -37,7 +37,7 @@ import numpy as np
 from ..scattering import FOUR_PI
 from ..spec import SceneSpec
 from .diffuse_table import DEFAULT_GRID, DiffuseTable, TableGrid, build_diffuse_table
-from .mitsuba_scene import HAZE_BOTTOM_M, LoadedScene, extinction_rgb, sunsky_dict
+from .mitsuba_scene import HAZE_BOTTOM_M, Extinction, LoadedScene, extinction_rgb, sunsky_dict
 
 DEFAULT_BOUNCES = 3
 """Surface interactions per camera path: sea → sky, vessel → sea → sky. Measured on the
@@ -362,7 +362,7 @@ class PhysicalRenderer:
 
     def table(
         self,
-        sigma: float | np.ndarray,
+        sigma: Extinction,
         albedo: float,
         g: float,
         seed: int,
@@ -395,7 +395,7 @@ class PhysicalRenderer:
         )
 
     def render(
-        self, sigma: float | np.ndarray, albedo: float, g: float, spp: int, seed: int
+        self, sigma: Extinction, albedo: float, g: float, spp: int, seed: int
     ) -> tuple[np.ndarray, PhysicalLevel]:
         """Linear RGB radiance (H, W, 3) of one level; ``sigma`` as in :meth:`table`."""
         import time
