@@ -58,7 +58,7 @@ def child(mode: str, spp: int, out: Path) -> None:
     from seahaze.render.variant import select_variant
     from seahaze.sceneio import load_scene
     from seahaze.spec import with_overrides
-    from seahaze.visibility import extinction_coefficient
+    from seahaze.visibility import channel_extinction
 
     spec, _ = load_scene(SCENE)
     spec = with_overrides(spec, spp=spp, mode=mode)
@@ -75,7 +75,7 @@ def child(mode: str, spp: int, out: Path) -> None:
     clean_s = time.perf_counter() - start
     images, seconds = [], []
     for i, v in enumerate(LEVELS):
-        sigma = extinction_coefficient(v, haze.threshold)
+        sigma = channel_extinction(v, haze.threshold, haze.extinction_spectrum)
         passes.render_level(mode, loaded, geo, clean, sigma, haze, warm.render, 100 + i)
         start = time.perf_counter()
         level = passes.render_level(mode, loaded, geo, clean, sigma, haze, spec.render, i)

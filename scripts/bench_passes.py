@@ -42,7 +42,7 @@ def run_pass(name: str, res: tuple[int, int], spp: int, vis: float) -> dict:
     from seahaze.render.variant import select_variant
     from seahaze.sceneio import load_scene
     from seahaze.spec import with_overrides
-    from seahaze.visibility import extinction_coefficient
+    from seahaze.visibility import channel_extinction
 
     spec, _ = load_scene(ROOT / "scenes" / "default.yaml")
     spec = with_overrides(spec, resolution=res, spp=spp, levels=[vis])
@@ -52,7 +52,8 @@ def run_pass(name: str, res: tuple[int, int], spp: int, vis: float) -> dict:
     geometry = build_geometry(spec, camera)
     t_geometry = time.perf_counter() - t0
     loaded = build_scene(spec, camera, geometry, [vis])
-    haze, sigma = spec.haze, extinction_coefficient(vis, spec.haze.threshold)
+    haze = spec.haze
+    sigma = channel_extinction(vis, haze.threshold, haze.extinction_spectrum)
     geo = passes.render_geometry(loaded) if name == "asm" else None
     clean = passes.render_clean(loaded, spp, 0, haze.albedo, haze.g) if name == "asm" else None
     rss_before = proc_status_mib()

@@ -120,7 +120,7 @@ def main() -> None:
     from seahaze.render.mitsuba_scene import build_scene
     from seahaze.render.variant import select_variant
     from seahaze.sceneio import load_scene
-    from seahaze.visibility import extinction_coefficient
+    from seahaze.visibility import channel_extinction, extinction_coefficient
 
     spec, name = load_scene(SCENE)
     variant = select_variant(spec.render.variant)
@@ -155,8 +155,14 @@ def main() -> None:
         key = level_key(level)
         work = args.work / f"{key}-{digest[:12]}.npz"
         acc = Accumulator.load(work, shape)
-        sigma = 0.0 if level == "clean" else extinction_coefficient(float(level), haze.threshold)
-        loaded.set_haze(sigma, haze.albedo, haze.g)
+        clean = level == "clean"
+        sigma = 0.0 if clean else extinction_coefficient(float(level), haze.threshold)
+        rgb = (
+            0.0
+            if clean
+            else channel_extinction(float(level), haze.threshold, haze.extinction_spectrum)
+        )
+        loaded.set_haze(rgb, haze.albedo, haze.g)
         level_index = LEVELS.index(level)
         while True:
             done = acc.n >= args.min_batches and acc.relative_error() <= args.target
