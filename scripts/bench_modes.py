@@ -27,7 +27,6 @@ import hashlib
 import json
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -51,50 +50,29 @@ STRIP_SPP = {"reference": 64, "asm": 64, "physical": 64}
 
 def child(mode: str, spp: int, out: Path) -> None:
     """Render the three levels in ``mode`` at ``spp`` and save radiance, timings and memory."""
-    from seahaze.camera import Camera
-    from seahaze.geometry import build_geometry
-    from seahaze.render import passes
-    from seahaze.render.mitsuba_scene import build_scene
-    from seahaze.render.variant import select_variant
+    from seahaze.render.engine import render_scene
     from seahaze.sceneio import load_scene
     from seahaze.spec import with_overrides
-    from seahaze.visibility import channel_extinction
 
     spec, _ = load_scene(SCENE)
-    spec = with_overrides(spec, spp=spp, mode=mode)
-    variant = select_variant(spec.render.variant)
-    camera = Camera.from_spec(spec.camera)
-    geometry = build_geometry(spec, camera)
-    loaded = build_scene(spec, camera, geometry, list(LEVELS), haze_box=mode != "physical")
-    haze = spec.haze
-    geo = passes.render_geometry(loaded)
-    warm = with_overrides(spec, spp=1)
-    passes.render_clean(loaded, 1, 0, haze.albedo, haze.g)
-    start = time.perf_counter()
-    clean = passes.render_clean(loaded, spp, 1, haze.albedo, haze.g)
-    clean_s = time.perf_counter() - start
-    images, seconds = [], []
-    for i, v in enumerate(LEVELS):
-        sigma = channel_extinction(v, haze.threshold, haze.extinction_spectrum)
-        passes.render_level(mode, loaded, geo, clean, sigma, haze, warm.render, 100 + i)
-        start = time.perf_counter()
-        level = passes.render_level(mode, loaded, geo, clean, sigma, haze, spec.render, i)
-        seconds.append(time.perf_counter() - start)
-        images.append(level.radiance)
+    spec = with_overrides(spec, spp=spp, mode=mode, levels=[float(v) for v in LEVELS])
+    render_scene(with_overrides(spec, spp=1), "warm-up")  # compiles every kernel
+    scene = render_scene(spec, "benchmark")
+    seconds = [scene.timings[f"level_{level.name}"] for level in scene.levels]
     peak_mib = proc_status_mib("VmHWM")
     vis_error, vis_stderr = measured_visibility_errors(mode, spp)
     np.savez(
         out,
-        images=np.stack(images),
+        images=np.stack([level.radiance for level in scene.levels]),
         seconds=np.array(seconds),
-        clean_seconds=clean_s,
+        clean_seconds=scene.timings["clean"],
         peak_mib=peak_mib,
         vis_error=vis_error,
         vis_stderr=vis_stderr,
-        variant=variant,
-        distance=geo.distance_m,
-        instance=geo.instance,
-        elevation=np.degrees(np.arcsin(np.clip(geo.directions[..., 2], -1.0, 1.0))),
+        variant=scene.variant,
+        distance=scene.geometry.distance_m,
+        instance=scene.geometry.instance,
+        elevation=scene.geometry.elevation_deg(),
     )
 
 
@@ -103,10 +81,11 @@ def measured_visibility_errors(mode: str, spp: int) -> tuple[np.ndarray, np.ndar
     standard error: the thin-target calibration scene under the benchmark scene's sun, sky and
     haze, rendered in ``mode`` at ``spp`` (4 batches; NaN where the fit fails at low spp)."""
     from seahaze.sceneio import load_scene
-    from seahaze.verify import run_verify
+    from seahaze.verify import VerifySettings, run_verify
 
     spec, _ = load_scene(SCENE)
-    report = run_verify(spec, list(LEVELS), mode=mode, spp=max(spp, 4), batches=4, seed=1)
+    settings = VerifySettings(mode=mode, spp=max(spp, 4), batches=4, seed=1)
+    report = run_verify(spec, list(LEVELS), settings)
     error = np.array([level.error for level in report.levels])
     stderr = np.array([level.stderr_m / level.visibility_m for level in report.levels])
     return error, stderr
@@ -114,7 +93,7 @@ def measured_visibility_errors(mode: str, spp: int) -> tuple[np.ndarray, np.ndar
 
 def load_references() -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict]:
     """Reference radiance and luminance standard error per level, after checking checksums."""
-    from seahaze.imaging import read_exr
+    from seahaze.fileio import read_exr
 
     meta = json.loads((REFS / "references.json").read_text())
     if meta["scene_sha256"] != hashlib.sha256(SCENE.read_bytes()).hexdigest():

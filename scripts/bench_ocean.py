@@ -20,22 +20,16 @@ SEA_STATES = {"calm": 2, "moderate": 5, "rough": 8}
 
 
 def _render_clean(spec):
-    from seahaze.camera import Camera
-    from seahaze.geometry import build_geometry
-    from seahaze.render import passes
-    from seahaze.render.mitsuba_scene import build_scene
+    from seahaze.render.engine import open_session
 
-    camera = Camera.from_spec(spec.camera)
+    timings: dict[str, float] = {}
+    session = open_session(spec, timings=timings)
+    session.render_clean()  # compile
     start = time.perf_counter()
-    geometry = build_geometry(spec, camera)
-    t_geometry = time.perf_counter() - start
-    loaded = build_scene(spec, camera, geometry, [1000.0])
-    passes.render_clean(loaded, spec.render.spp, 0, spec.haze.albedo, spec.haze.g)  # compile
-    start = time.perf_counter()
-    clean = passes.render_clean(loaded, spec.render.spp, 1, spec.haze.albedo, spec.haze.g)
+    clean = session.render_clean()
     t_clean = time.perf_counter() - start
-    geo = passes.render_geometry(loaded)
-    return clean, geo, len(geometry.sea.faces), t_geometry, t_clean
+    faces = len(session.geometry.sea.faces)
+    return clean, session.pixels, faces, timings["geometry_build"], t_clean
 
 
 def main() -> int:
@@ -45,9 +39,7 @@ def main() -> int:
     args = parser.parse_args()
     res = tuple(int(x) for x in args.res.lower().split("x"))
 
-    import numpy as np
-
-    from seahaze import imaging
+    from seahaze import fileio, imaging
     from seahaze.render.variant import select_variant
     from seahaze.sceneio import parse_scene_text
     from seahaze.spec import with_overrides
@@ -73,9 +65,8 @@ def main() -> int:
             spp=max(args.spp, 32),
         )
         clean, geo, *_ = _render_clean(spec)
-        elevation = np.degrees(np.arcsin(np.clip(geo.directions[..., 2], -1, 1)))
-        exposure = imaging.auto_exposure(clean, geo.distance_m, elevation)
-        imaging.write_png(
+        exposure = imaging.auto_exposure(clean, geo.distance_m, geo.elevation_deg())
+        fileio.write_png(
             ROOT / "docs" / "images" / f"ocean_{name}.png", imaging.to_srgb8(clean, exposure)
         )
         print(f"wrote docs/images/ocean_{name}.png (Beaufort {force})", flush=True)

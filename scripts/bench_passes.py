@@ -35,26 +35,22 @@ def proc_status_mib(field: str = "VmRSS") -> float:
 
 def run_pass(name: str, res: tuple[int, int], spp: int, vis: float) -> dict:
     """Run one pass in this process and return its timings and memory."""
-    from seahaze.camera import Camera
-    from seahaze.geometry import build_geometry
     from seahaze.render import passes
-    from seahaze.render.mitsuba_scene import build_scene
-    from seahaze.render.variant import select_variant
+    from seahaze.render.engine import open_session
     from seahaze.sceneio import load_scene
     from seahaze.spec import with_overrides
     from seahaze.visibility import channel_extinction
 
     spec, _ = load_scene(ROOT / "scenes" / "default.yaml")
-    spec = with_overrides(spec, resolution=res, spp=spp, levels=[vis])
-    variant = select_variant(spec.render.variant)
-    camera = Camera.from_spec(spec.camera)
-    t0 = time.perf_counter()
-    geometry = build_geometry(spec, camera)
-    t_geometry = time.perf_counter() - t0
-    loaded = build_scene(spec, camera, geometry, [vis])
+    # The yardstick passes (volpath clean, reference, asm) need the scene with the haze box.
+    spec = with_overrides(spec, resolution=res, spp=spp, levels=[vis], mode="reference")
+    timings: dict[str, float] = {}
+    session = open_session(spec, timings=timings)
+    variant, loaded, geo = session.variant, session.loaded, session.pixels
+    geometry = session.geometry
+    t_geometry = timings["geometry_build"]
     haze = spec.haze
     sigma = channel_extinction(vis, haze.threshold, haze.extinction_spectrum)
-    geo = passes.render_geometry(loaded) if name == "asm" else None
     clean = passes.render_clean(loaded, spp, 0, haze.albedo, haze.g) if name == "asm" else None
     rss_before = proc_status_mib()
 

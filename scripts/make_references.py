@@ -114,20 +114,18 @@ def main() -> None:
 
     import mitsuba as mi
 
-    from seahaze.camera import Camera
-    from seahaze.geometry import build_geometry
     from seahaze.render import passes
-    from seahaze.render.mitsuba_scene import build_scene
-    from seahaze.render.variant import select_variant
+    from seahaze.render.engine import open_session
     from seahaze.sceneio import load_scene
+    from seahaze.seeds import RenderPass, render_seed
+    from seahaze.spec import with_overrides
     from seahaze.visibility import channel_extinction, extinction_coefficient
 
     spec, name = load_scene(SCENE)
-    variant = select_variant(spec.render.variant)
-    camera = Camera.from_spec(spec.camera)
-    geometry = build_geometry(spec, camera)
-    # The haze box is sized for all benchmark levels, whichever are rendered now.
-    loaded = build_scene(spec, camera, geometry, [float(v) for v in LEVELS[1:]])
+    # volpath through the haze box, sized for all benchmark levels, whichever are rendered now.
+    spec = with_overrides(spec, mode="reference", levels=[float(v) for v in LEVELS[1:]])
+    session = open_session(spec)
+    variant, camera, loaded = session.variant, session.camera, session.loaded
     haze = spec.haze
     args.work.mkdir(parents=True, exist_ok=True)
     OUT.mkdir(parents=True, exist_ok=True)
@@ -168,7 +166,7 @@ def main() -> None:
             done = acc.n >= args.min_batches and acc.relative_error() <= args.target
             if done or acc.seconds > 60.0 * args.max_minutes:
                 break
-            seed = passes._seed(spec.render.seed, 99, level_index, acc.n)
+            seed = render_seed(spec.render.seed, RenderPass.CONVERGED_REFERENCE, level_index, acc.n)
             start = time.perf_counter()
             rgb = passes.render_radiance(loaded, args.batch_spp, seed)
             acc.add(rgb.astype(np.float64), time.perf_counter() - start)

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from seahaze.camera import Camera
-from seahaze.geometry import MeshData, SceneGeometry, VesselInstance
 from seahaze.spec import SceneSpec
+from seahaze.world import MeshData, SceneGeometry, VesselInstance
 
 PLANE_HALF_SIZE_M = 2.0e5
 
@@ -71,7 +71,7 @@ def mitsuba_variant() -> str:
 def load_flat_scene(spec: SceneSpec, vessels=(), visibilities=(1000.0,), haze_box=True):
     """Load a Mitsuba scene with a flat sea and the given box vessels (``haze_box=False`` for
     the physical mode)."""
-    from seahaze.render.mitsuba_scene import build_scene
+    from seahaze.render.scene import build_scene
 
     camera = Camera.from_spec(spec.camera)
     geometry = SceneGeometry(flat_sea_mesh(), 0.05, None, list(vessels))

@@ -11,13 +11,13 @@ import trimesh
 
 from conftest import box_vessel, load_flat_scene, small_spec
 from seahaze.camera import Camera
-from seahaze.geometry import MeshData, build_geometry
 from seahaze.labels import boxes_from_instances
-from seahaze.metric.dataset import load_dataset
 from seahaze.metric.evaluate import evaluate_level
+from seahaze.metric.reader import load_dataset
 from seahaze.render import passes
-from seahaze.render.mitsuba_scene import build_scene
+from seahaze.render.scene import build_scene
 from seahaze.vessels import CLASS_NAMES, VESSEL_CLASSES
+from seahaze.world import MeshData, build_geometry
 
 pytestmark = pytest.mark.usefixtures("mitsuba_variant")
 

@@ -28,7 +28,7 @@ import pytest
 import yaml
 from PIL import Image
 
-from seahaze import imaging
+from seahaze import fileio
 from seahaze.batch import (
     LOCK_NAME,
     BatchPlan,
@@ -39,7 +39,7 @@ from seahaze.batch import (
     scene_seed,
 )
 from seahaze.cli import main
-from seahaze.imaging import read_exr
+from seahaze.fileio import read_exr
 from seahaze.sceneio import SceneFileError, load_scene, parse_scene_text
 from seahaze.vessels import CLASS_NAMES
 
@@ -211,7 +211,7 @@ def test_a_folder_without_scene_files_is_bad_input(tmp_path, capsys):
 
 
 def test_unreachable_dask_scheduler_is_reported(template, tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr("seahaze.batch.DASK_CONNECT_TIMEOUT_S", 1)
+    monkeypatch.setattr("seahaze.batch.executors.DASK_CONNECT_TIMEOUT_S", 1)
     args = ["--executor", "dask", "--scheduler", "tcp://127.0.0.1:9"]
     code = main(["render", str(template), "--out", str(tmp_path), "--scenes", "1", *args])
     err = capsys.readouterr().err
@@ -391,14 +391,14 @@ def test_a_full_disk_stops_cleanly_and_keeps_finished_scenes(
     for name in ("tiny_00001", "tiny_00002"):
         manifest["scenes"][name]["status"] = "pending"
     (out / "dataset.json").write_text(json.dumps(manifest, indent=2) + "\n")
-    real_write_png = imaging.write_png
+    real_write_png = fileio.write_png
 
     def write_png(path, image8):
         if "tiny_00002" in str(path):
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
         real_write_png(path, image8)
 
-    monkeypatch.setattr(imaging, "write_png", write_png)
+    monkeypatch.setattr(fileio, "write_png", write_png)
     assert _render(template, out) == 3
     err = capsys.readouterr().err
     assert "No space left on device" in err and "rerun the same command" in err
@@ -409,7 +409,7 @@ def test_a_full_disk_stops_cleanly_and_keeps_finished_scenes(
     for rel in ("images/clean/tiny_00001.png", "exr/v1000/tiny_00001.exr", "meta/tiny_00001.json"):
         assert (out / rel).read_bytes() == (reference / rel).read_bytes(), rel
 
-    monkeypatch.setattr(imaging, "write_png", real_write_png)
+    monkeypatch.setattr(fileio, "write_png", real_write_png)
     assert _render(template, out) == 0
     assert "wrote 1 scene(s)" in capsys.readouterr().out
     _assert_same_tree(out, reference)

@@ -1,8 +1,8 @@
 """Hard cases of issue #5 rendered in every mode: extreme visibility, sun, camera and haze.
 
 Each case goes through the real code: scene-changing cases (sun, camera, haze top) through
-``pipeline.render_scene`` into a folder, whose files are read back; haze-only cases (V, albedo,
-g) through ``passes.render_level`` on one shared loaded scene. Every output must be finite and
+``render_scene`` written into a folder, whose files are read back; haze-only cases (V, albedo,
+g) through ``render_level`` on one shared loaded scene. Every output must be finite and
 non-negative, the distance pass sane (the exact plane distance on a flat sea, ``inf`` for the
 sky) and the boxes inside the frame. The Beer–Lambert law of an absorbing medium (albedo 0) on
 an emitter is checked exactly in ``tests/test_render_physics.py``
@@ -18,15 +18,19 @@ import numpy as np
 import pytest
 
 from conftest import box_vessel, load_flat_scene, small_spec
-from seahaze import imaging, pipeline
+from seahaze import annotate, fileio, imaging
 from seahaze.camera import Camera
-from seahaze.geometry import build_geometry
+from seahaze.dataset import Layout
+from seahaze.dataset.writer import write_scene
 from seahaze.labels import boxes_from_instances
 from seahaze.render import passes
-from seahaze.render.mitsuba_scene import build_scene
+from seahaze.render.engine import render_scene
+from seahaze.render.levels import LevelRender, render_level
+from seahaze.render.scene import build_scene
 from seahaze.spec import SceneSpec
 from seahaze.vessels import CLASS_NAMES
 from seahaze.visibility import extinction_coefficient, level_name
+from seahaze.world import build_geometry
 
 pytestmark = pytest.mark.usefixtures("mitsuba_variant")
 
@@ -129,17 +133,18 @@ SCENE_CASES: dict[str, dict[str, dict[str, Any]]] = {
 @pytest.mark.parametrize("case", SCENE_CASES)
 def test_scene_case_renders_sane_outputs(case: str, mode: str, tmp_path: Path) -> None:
     spec = hard_spec(**SCENE_CASES[case], render={"mode": mode})
-    result = pipeline.render_scene(spec, "hard", tmp_path)
+    result = render_scene(spec, "hard")
+    write_scene(Layout(tmp_path), result)
     camera = Camera.from_spec(spec.camera)
     level = level_name(LEVEL_V)
     labels = (tmp_path / "labels" / level / "hard.txt").read_text().splitlines()
     assert labels == (tmp_path / "labels" / "clean" / "hard.txt").read_text().splitlines()
     in_boxes = check_boxes(labels, camera.width, camera.height)
     assert len(labels) == len(result.boxes)
-    distance = imaging.read_exr(tmp_path / "depth" / "hard.exr")["Z"]
+    distance = fileio.read_exr(tmp_path / "depth" / "hard.exr")["Z"]
     check_distance(distance, camera, in_boxes, flat_sea=spec.sea.model == "flat")
     for name in ("clean", level):
-        exr = imaging.read_exr(tmp_path / "exr" / name / "hard.exr")
+        exr = fileio.read_exr(tmp_path / "exr" / name / "hard.exr")
         rgb = exr["RGB"] if "RGB" in exr else np.stack([exr[c] for c in "RGB"], axis=-1)
         check_radiance(rgb, f"{case} {mode} {name}")
     assert np.isfinite(result.exposure) and result.exposure > 0.0
@@ -211,13 +216,11 @@ class Shared:
             self.loaded, self.spec.render.spp, 1, self.spec.haze.albedo, self.spec.haze.g
         )
 
-    def level(self, mode: str, visibility: float, **haze: float) -> passes.LevelRender:
+    def level(self, mode: str, visibility: float, **haze: float) -> LevelRender:
         spec = self.spec.haze.model_copy(update=haze)
         sigma = extinction_coefficient(visibility, spec.threshold)
         loaded = self.loaded_physical if mode == "physical" else self.loaded
-        return passes.render_level(
-            mode, loaded, self.geo, self.clean, sigma, spec, self.spec.render, 0
-        )
+        return render_level(mode, loaded, self.geo, self.clean, sigma, spec, self.spec.render, 0)
 
 
 @pytest.fixture(scope="module")
@@ -299,10 +302,10 @@ def board_scene():
     )
 
 
-def board_levels(board_scene, mode: str, levels: tuple[float, ...]) -> list[passes.LevelRender]:
+def board_levels(board_scene, mode: str, levels: tuple[float, ...]) -> list[LevelRender]:
     spec, loaded, _, geo, clean, _ = board_scene
     return [
-        passes.render_level(
+        render_level(
             mode,
             loaded[mode],
             geo,
@@ -327,7 +330,7 @@ def test_target_contrast_falls_monotonically_with_visibility(board_scene, mode: 
         # The mean of the horizon band, not the median: Monte Carlo noise is skewed (rare
         # bright samples), so the median of a noisy band underestimates the sky.
         horizon = float(imaging.luminance(level.radiance[band]).mean())
-        (c,) = pipeline.apparent_contrasts(level.radiance, geo.instance, 1, horizon)
+        (c,) = annotate.apparent_contrasts(level.radiance, geo.instance, 1, horizon)
         contrasts.append(c)
     # A dark target against the horizon: negative contrast whose size shrinks as V falls.
     assert contrasts[0] < -0.3, contrasts
@@ -350,6 +353,6 @@ def test_asm_contrast_follows_koschmieder(board_scene) -> None:
         a = float(imaging.luminance(level.airlight.rgb))
         sigma = extinction_coefficient(v, spec.haze.threshold)
         expected = float(np.mean(np.exp(-sigma * d) * (j - a)) / a)
-        horizon = pipeline.horizon_luminance(level.radiance, geo.distance_m, elevation)
-        (c,) = pipeline.apparent_contrasts(level.radiance, geo.instance, 1, horizon)
+        horizon = annotate.horizon_luminance(level.radiance, geo.distance_m, elevation)
+        (c,) = annotate.apparent_contrasts(level.radiance, geo.instance, 1, horizon)
         assert c == pytest.approx(expected, rel=0.01, abs=1e-5), v

@@ -20,9 +20,9 @@ import pytest
 from PIL import Image
 
 from seahaze.metric import cli as metric_cli
-from seahaze.metric.dataset import ImageTruth, YoloBox, load_dataset, load_level_truth
 from seahaze.metric.errors import MetricInputError
 from seahaze.metric.evaluate import build_coco, coco_scores
+from seahaze.metric.reader import ImageTruth, YoloBox, load_dataset, load_level_truth
 
 NAMES = ["container_ship", "fishing_boat", "buoy"]
 

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from conftest import box_vessel, load_flat_scene, small_spec
+from seahaze.haze import HAZE_BOTTOM_M, hg_phase
 from seahaze.render import passes
 from seahaze.render.diffuse_table import TableGrid, build_diffuse_table
-from seahaze.render.mitsuba_scene import HAZE_BOTTOM_M
-from seahaze.scattering import hg_phase
+from seahaze.render.levels import LevelRenderer
 from seahaze.visibility import channel_extinction
 
 pytestmark = pytest.mark.usefixtures("mitsuba_variant")
@@ -90,13 +90,19 @@ class _Scenes:
         )
         self.geo = passes.render_geometry(self.physical)
         self.clean = passes.render_clean(self.physical, 16, 1, 0.998, 0.75)
+        # One renderer per mode, as a scene render keeps one for all its levels.
+        self.renderers = {
+            mode: LevelRenderer(
+                mode, loaded, self.geo, self.clean, self.spec.haze, self.spec.render
+            )
+            for mode, loaded in (("physical", self.physical), ("reference", self.reference))
+        }
 
     def level(self, mode: str, visibility: float, spp: int, seed: int, **haze) -> np.ndarray:
         spec = self.spec.haze.model_copy(update=haze)
         render = self.spec.render.model_copy(update={"spp": spp, "seed": seed})
-        loaded = self.physical if mode == "physical" else self.reference
         sigma = channel_extinction(visibility, spec.threshold, spec.extinction_spectrum)
-        return passes.render_level(mode, loaded, self.geo, self.clean, sigma, spec, render, 0)
+        return self.renderers[mode].render(sigma, 0, render, spec)
 
 
 @pytest.fixture(scope="module")
@@ -137,7 +143,7 @@ def test_absorbing_haze_attenuates_the_sky_by_beer_lambert(scenes: _Scenes, spec
         "physical", 10000.0, 16, 0, albedo=0.0, extinction_spectrum=spectrum
     ).radiance
     sigma = channel_extinction(10000.0, "koschmieder", spectrum)
-    length = passes.haze_path_length(scenes.geo, HAZE_BOTTOM_M, scenes.spec.haze.top_m)
+    length = scenes.geo.haze_path_length(scenes.spec.haze.top_m, HAZE_BOTTOM_M)
     # Sky pixels whose optical depth is below 2. Each pixel averages 16 random positions over
     # its 0.8° of elevation, across which exp(-σL) changes by up to 15 %: compare row means
     # (48 pixels each) to the pixel-centre law, and the overall mean, channel by channel.

@@ -12,7 +12,7 @@ import yaml
 from PIL import Image
 
 from seahaze.cli import main
-from seahaze.imaging import read_exr
+from seahaze.fileio import read_exr
 
 ROOT = Path(__file__).resolve().parents[1]
 LEVELS = ["v0300", "v4000"]

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from conftest import box_vessel, load_flat_scene, small_spec
+from seahaze.haze import HAZE_BOTTOM_M
 from seahaze.labels import boxes_from_instances
 from seahaze.render import passes
-from seahaze.render.mitsuba_scene import HAZE_BOTTOM_M
 from seahaze.visibility import extinction_coefficient
 
 pytestmark = pytest.mark.usefixtures("mitsuba_variant")
@@ -55,7 +55,7 @@ def test_absorbing_medium_gives_beer_lambert_on_the_sky(sigma):
     hazy = passes.render_reference_level(loaded, sigma, 0.0, 0.0, 256, 1, 0)
     sky = np.isinf(geo.distance_m)
     assert sky.mean() > 0.9
-    length = passes.haze_path_length(geo, HAZE_BOTTOM_M, 300.0)[sky]
+    length = geo.haze_path_length(300.0, HAZE_BOTTOM_M)[sky]
     t = np.exp(-np.asarray(sigma)[None, ...] * length[:, None]) * np.ones((1, 3))
     assert 0.2 < t.mean() < 0.9
     expected = (clean[sky] * t).sum(axis=0)
@@ -71,12 +71,12 @@ def test_haze_path_length_cases():
     d = np.array([[[0.0, 0.6, 0.8], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]]], np.float32)
     dist = np.array([[np.inf, 10.0, np.inf]], np.float32)
     geo = GeometryPass(dist, np.full((1, 3), -1), d, np.array([0.0, 0.0, 10.0]))
-    length = passes.haze_path_length(geo, -50.0, 90.0)
+    length = geo.haze_path_length(90.0, -50.0)
     assert length[0, 0] == pytest.approx(80.0 / 0.8)  # up to the top
     assert length[0, 1] == pytest.approx(10.0)  # to the surface
     assert np.isinf(length[0, 2])  # horizontal inside the layer: never leaves
     above = GeometryPass(dist, np.full((1, 3), -1), d, np.array([0.0, 0.0, 150.0]))
-    length = passes.haze_path_length(above, -50.0, 90.0)
+    length = above.haze_path_length(90.0, -50.0)
     assert length[0, 0] == 0.0 and length[0, 2] == 0.0
 
 

@@ -90,9 +90,9 @@ def test_calibration_camera_puts_the_horizon_on_a_row_boundary():
 
 @pytest.mark.usefixtures("mitsuba_variant")
 def test_targets_are_where_they_should_be():
-    from seahaze.geometry import SceneGeometry, build_sea
     from seahaze.render import passes
-    from seahaze.render.mitsuba_scene import build_scene
+    from seahaze.render.scene import build_scene
+    from seahaze.world import SceneGeometry, build_sea
 
     spec = verify.calibration_spec(SceneSpec(), SMALL_RES)
     camera = Camera.from_spec(spec.camera)

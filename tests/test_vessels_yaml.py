@@ -13,14 +13,14 @@ import trimesh
 
 from seahaze.camera import Camera
 from seahaze.cli import main
-from seahaze.geometry import build_geometry
 from seahaze.labels import boxes_from_instances
 from seahaze.render import passes
-from seahaze.render.mitsuba_scene import build_scene
+from seahaze.render.scene import build_scene
 from seahaze.sceneio import SceneFileError, load_scene, parse_scene_text
 from seahaze.spec import SceneSpec
 from seahaze.vessels import CLASS_NAMES, load_user_mesh
 from seahaze.vessels.user_mesh import ASSETS_DIR
+from seahaze.world import build_geometry
 from test_annotations import projected_box, visible_points
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -68,8 +68,8 @@ class Camera:
         return self.ray_directions(u, v)
 
     def project(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Project world points (N, 3) to ``(u, v, in_front)``; ``in_front`` is False behind "
-        "the camera."""
+        """Project world points (N, 3) to ``(u, v, in_front)``; ``in_front`` is False behind
+        the camera."""
         forward, right, up = self.basis()
         rel = np.asarray(points, float) - self.origin
         z = rel @ forward

@@ -5,15 +5,10 @@ level, so pixel values are comparable across levels (a brighter hazy level is br
 a different exposure). ``auto`` maps the median luminance of the clean image's sky within 10° of
 the horizon to :data:`AUTO_KEY` (a bright, unclipped horizon); without such sky pixels it maps the
 mean luminance to 0.18. Values above 1 after exposure clip (sun glints); the sRGB transfer
-function is IEC 61966-2-1 via colour-science. EXR files hold the linear radiance unscaled.
+function is IEC 61966-2-1 via colour-science. Files are written by :mod:`seahaze.fileio`.
 """
 
 from __future__ import annotations
-
-import os
-from collections.abc import Iterator
-from contextlib import contextmanager
-from pathlib import Path
 
 import numpy as np
 
@@ -47,52 +42,3 @@ def to_srgb8(radiance: np.ndarray, exposure: float) -> np.ndarray:
     linear = np.clip(np.nan_to_num(radiance * exposure, nan=0.0, posinf=1.0), 0.0, 1.0)
     encoded = colour.cctf_encoding(linear, function="sRGB")
     return np.round(encoded * 255.0).astype(np.uint8)
-
-
-@contextmanager
-def atomic_target(path: Path) -> Iterator[Path]:
-    """A temporary path beside ``path`` to write to; renamed onto ``path`` when the block ends.
-
-    An interrupted or failed write leaves no truncated file under the final name.
-    """
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    try:
-        yield tmp
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-
-
-def write_png(path: str | Path, image8: np.ndarray) -> None:
-    """Write an 8-bit RGB PNG atomically (temporary file, then rename)."""
-    from PIL import Image
-
-    with atomic_target(Path(path)) as tmp:
-        Image.fromarray(image8, mode="RGB").save(tmp, format="PNG")
-
-
-def write_exr(path: str | Path, channels: dict[str, np.ndarray]) -> None:
-    """Write float32 channels (each (H, W)) to an OpenEXR file atomically, ZIP-compressed."""
-    import OpenEXR
-
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    data = {
-        name: np.ascontiguousarray(values, dtype=np.float32) for name, values in channels.items()
-    }
-    with atomic_target(Path(path)) as tmp, OpenEXR.File(header, data) as exr:
-        exr.write(str(tmp))
-
-
-def write_rgb_exr(path: str | Path, radiance: np.ndarray) -> None:
-    """Linear RGB radiance (H, W, 3) as an EXR with channels R, G, B."""
-    write_exr(path, {"R": radiance[..., 0], "G": radiance[..., 1], "B": radiance[..., 2]})
-
-
-def read_exr(path: str | Path) -> dict[str, np.ndarray]:
-    """All channels of an EXR file as float arrays (an RGB layer comes back as one (H, W, 3) "
-    "'RGB')."""
-    import OpenEXR
-
-    with OpenEXR.File(str(path)) as exr:
-        return {name: np.array(ch.pixels) for name, ch in exr.channels().items()}

@@ -10,7 +10,8 @@ from pathlib import Path
 
 from PIL import Image, ImageDraw
 
-from .dataset import CLEAN, Layout
+from .dataset import Layout
+from .visibility import CLEAN_LEVEL
 
 BOX_COLOUR = (255, 210, 0)
 CAPTION_HEIGHT_FRACTION = 0.07
@@ -26,7 +27,7 @@ def dataset_levels(root: Path) -> list[str]:
     if not manifest.exists():
         raise PreviewError(f"{manifest}: not found; is {root} a seahaze dataset folder?")
     data = json.loads(manifest.read_text())
-    return [CLEAN, *(level["name"] for level in data["levels"])]
+    return [CLEAN_LEVEL, *(level["name"] for level in data["levels"])]
 
 
 def _read_boxes(
@@ -63,7 +64,7 @@ def _tile(
                 names[cls] if cls < len(names) else str(cls),
                 fill=BOX_COLOUR,
             )
-    caption = "clean" if level == CLEAN else f"V = {int(level[1:])} m"
+    caption = "clean" if level == CLEAN_LEVEL else f"V = {int(level[1:])} m"
     bar = round(tile.height * CAPTION_HEIGHT_FRACTION)
     draw.rectangle([0, 0, tile.width, bar], fill=(0, 0, 0))
     draw.text((6, max(0, bar // 2 - 6)), f"{scene}  {caption}", fill=(255, 255, 255))

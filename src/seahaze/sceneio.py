@@ -221,7 +221,7 @@ def parse_scene_text(
 
 def _check_vessel_classes(spec: SceneSpec, file: str, lines: dict[Loc, int]) -> list[Problem]:
     """Vessel classes are checked against the library, which the schema cannot know."""
-    from .vessels import CLASS_NAMES, VESSEL_CLASSES
+    from .vessels import CLASS_NAMES, length_problem
 
     allowed = ", ".join(CLASS_NAMES)
     problems = []
@@ -237,18 +237,10 @@ def _check_vessel_classes(spec: SceneSpec, file: str, lines: dict[Loc, int]) -> 
                 )
             )
             continue
-        lo, hi = VESSEL_CLASSES[vessel.kind].length_range_m
-        if vessel.length_m is not None and not lo <= vessel.length_m <= hi:
+        problem = None if vessel.length_m is None else length_problem(vessel.kind, vessel.length_m)
+        if problem is not None:
             loc = ("vessels", "placed", i, "length_m")
-            problems.append(
-                Problem(
-                    file,
-                    _line_for(loc, lines),
-                    _dotted(loc),
-                    f"{vessel.length_m:g} m is outside the {vessel.kind} range (allowed: "
-                    f"{lo:g} to {hi:g} m)",
-                )
-            )
+            problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), problem))
     sampler = spec.vessels.sample
     for kind in (sampler.classes or {}) if sampler else {}:
         if kind not in CLASS_NAMES:

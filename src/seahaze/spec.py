@@ -8,6 +8,7 @@ Azimuths and headings are measured counter-clockwise from +x when seen from abov
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Annotated, Any, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
@@ -591,6 +592,31 @@ RENDER_MODES: tuple[str, ...] = get_args(RenderSpec.model_fields["mode"].annotat
 """The hazy-level renderers, in the order the CLI lists them."""
 
 
+def with_changes(spec: SceneSpec, changes: Mapping[str, Any]) -> SceneSpec:
+    """A copy of ``spec`` with nested ``changes`` (a mapping merged into its sections, any other
+    value replacing the field) validated by the same schema.
+
+    Raises :class:`OverrideError` with a one-line message naming the first rejected field.
+    """
+    data = _merged(spec.model_dump(mode="json", by_alias=True), changes)
+    try:
+        return SceneSpec.model_validate(data)
+    except ValueError as err:
+        first = err.errors()[0] if hasattr(err, "errors") else None
+        where = ".".join(str(p) for p in first["loc"]) if first else ""
+        raise OverrideError(f"{where}: {first['msg'] if first else err}") from None
+
+
+def _merged(data: dict[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
+    out = dict(data)
+    for key, value in changes.items():
+        if isinstance(value, Mapping) and isinstance(out.get(key), dict):
+            out[key] = _merged(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
 def with_overrides(
     spec: SceneSpec,
     *,
@@ -601,19 +627,11 @@ def with_overrides(
     variant: str | None = None,
     levels: list[float] | None = None,
 ) -> SceneSpec:
-    """A copy of ``spec`` with command-line overrides applied and validated by the same schema."""
-    data = spec.model_dump(mode="json", by_alias=True)
-    render = data["render"]
-    for key, value in (("spp", spp), ("seed", seed), ("mode", mode), ("variant", variant)):
-        if value is not None:
-            render[key] = value
+    """A copy of ``spec`` with the command line's overrides (None: keep the scene's value)."""
+    render = {"spp": spp, "seed": seed, "mode": mode, "variant": variant}
+    changes: dict[str, Any] = {"render": {k: v for k, v in render.items() if v is not None}}
     if resolution is not None:
-        data["camera"]["resolution"] = list(resolution)
+        changes["camera"] = {"resolution": list(resolution)}
     if levels is not None:
-        data["haze"]["levels"] = list(levels)
-    try:
-        return SceneSpec.model_validate(data)
-    except ValueError as err:
-        first = err.errors()[0] if hasattr(err, "errors") else None
-        where = ".".join(str(p) for p in first["loc"]) if first else ""
-        raise OverrideError(f"{where}: {first['msg'] if first else err}") from None
+        changes["haze"] = {"levels": list(levels)}
+    return with_changes(spec, changes)

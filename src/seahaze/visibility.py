@@ -150,8 +150,8 @@ def koschmieder_contrast(
     visibility_m: float,
     threshold: Threshold | str = Threshold.KOSCHMIEDER,
 ) -> float | np.ndarray:
-    """Apparent contrast of a black target at ``distance_m`` against the horizon: "
-    "``-exp(-sigma d)``."""
+    """Apparent contrast of a black target at ``distance_m`` against the horizon:
+    ``-exp(-sigma d)``."""
     return -np.exp(-extinction_coefficient(visibility_m, threshold) * np.asarray(distance_m))
 
 
@@ -191,9 +191,22 @@ def regulation_class(visibility_m: float) -> RegulationClass:
     return REGULATION_CLASSES[-1]
 
 
+CLEAN_LEVEL = "clean"
+"""Name of the haze-free level (its folder in a dataset), beside the hazy levels' ``v0300``..."""
+
+
+_LEVEL_NAME = re.compile(r"^v(\d+)$")
+
+
 def level_name(visibility_m: float) -> str:
     """Folder name of a level: ``v`` plus the metres, zero-padded to 4 digits (``v0300``)."""
     return f"v{round(visibility_m):04d}"
+
+
+def is_level_name(name: str) -> bool:
+    """Whether ``name`` is a level folder name (``clean`` or ``v`` + a positive integer)."""
+    match = _LEVEL_NAME.match(name)
+    return name == CLEAN_LEVEL or (match is not None and int(match[1]) > 0)
 
 
 class VisSelectionError(ValueError):

@@ -7,15 +7,6 @@ interpolation (paper, Eq. 5), whose navigation regulation class (paper, Table 1)
 mAP is computed by ``faster_coco_eval`` (:func:`coco_scores`). See docs/metric.md.
 """
 
-from seahaze.metric.dataset import (
-    Dataset,
-    ImageTruth,
-    YoloBox,
-    load_dataset,
-    load_level_truth,
-    parse_level,
-    read_yolo_file,
-)
 from seahaze.metric.errors import MetricInputError
 from seahaze.metric.evaluate import (
     CocoScores,
@@ -25,6 +16,15 @@ from seahaze.metric.evaluate import (
     coco_scores,
     evaluate_dataset,
     evaluate_level,
+)
+from seahaze.metric.reader import (
+    Dataset,
+    ImageTruth,
+    YoloBox,
+    load_dataset,
+    load_level_truth,
+    parse_level,
+    read_yolo_file,
 )
 from seahaze.metric.table import (
     Bound,

@@ -14,7 +14,6 @@ from collections.abc import Callable
 from functools import wraps
 from pathlib import Path
 
-from seahaze.metric.dataset import CLEAN, level_visibility_m, load_dataset, parse_level
 from seahaze.metric.errors import MetricInputError
 from seahaze.metric.evaluate import (
     DEFAULT_MAX_DETS,
@@ -26,6 +25,7 @@ from seahaze.metric.evaluate import (
     same_evaluator,
 )
 from seahaze.metric.evaluate import evaluate_dataset as evaluate_levels
+from seahaze.metric.reader import level_visibility_m, load_dataset, parse_level
 from seahaze.metric.table import (
     Bound,
     CalibrationTable,
@@ -36,6 +36,7 @@ from seahaze.metric.table import (
     round_m,
     save_table,
 )
+from seahaze.visibility import CLEAN_LEVEL
 
 Handler = Callable[[argparse.Namespace], int]
 EXIT_INPUT = 2
@@ -169,7 +170,7 @@ def cmd_newvis(args: argparse.Namespace) -> int:
         raise MetricInputError("give either --map VALUE or --pred DIR (with --dataset and --level)")
     table = load_table(args.table)
     level = parse_level(args.level) if args.level else None
-    if level == CLEAN:
+    if level == CLEAN_LEVEL:
         raise MetricInputError(
             "--level clean has no visibility; give the hazy level the "
             "restored images came from (e.g. 800 or v0800)"

@@ -18,20 +18,19 @@ import faster_coco_eval
 import numpy as np
 from faster_coco_eval import COCO, COCOeval_faster
 
-from seahaze.metric.dataset import (
-    CLEAN,
+from seahaze.metric.errors import MetricInputError, located
+from seahaze.metric.reader import (
     Dataset,
     ImageTruth,
     YoloBox,
-    is_level_name,
     level_visibility_m,
     load_level_truth,
     load_predictions,
     prediction_dir,
     sort_levels,
 )
-from seahaze.metric.errors import MetricInputError, located
 from seahaze.metric.table import CalibrationPoint, CalibrationTable, make_table
+from seahaze.visibility import CLEAN_LEVEL, is_level_name
 
 DEFAULT_MAX_DETS = 100
 """Detections kept per image and class, highest confidence first (the COCO default)."""
@@ -274,8 +273,8 @@ def calibrate(
             )
         )
     extra: dict[str, object] = {}
-    if CLEAN in dataset.levels and (Path(pred_root) / CLEAN).is_dir():
-        clean = evaluate_level(dataset, CLEAN, pred_root, max_dets=max_dets)
+    if CLEAN_LEVEL in dataset.levels and (Path(pred_root) / CLEAN_LEVEL).is_dir():
+        clean = evaluate_level(dataset, CLEAN_LEVEL, pred_root, max_dets=max_dets)
         results.insert(0, clean)
         extra["clean"] = {
             "map50": clean.scores.map50,

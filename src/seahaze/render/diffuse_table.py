@@ -37,7 +37,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..scattering import hg_phase, hg_sample_cos, rotate_directions
+from ..haze import hg_phase, hg_sample_cos, rotate_directions
 
 SeaReflection = Callable[[np.ndarray, np.random.Generator], tuple[np.ndarray, np.ndarray]]
 """(downward travel directions (m, 3), rng) → (reflected directions (m, 3), RGB weights (m, 3))."""

@@ -1,17 +1,13 @@
 """Render passes over one loaded scene: geometry (distance, instances), clean, hazy levels.
 
-Modes of a hazy level
-    ``physical``   seahaze's haze integrator (:mod:`seahaze.render.physical`): analytic
-                   transmittance, the sun's single scattering with shadow rays, the rest of the
-                   scattered light from a per-level plane-parallel table. Its scene has no
-                   Mitsuba medium (``build_scene(..., haze_box=False)``).
+Passes return linear radiance and per-pixel geometry as numpy arrays; they write no files.
+
+Hazy levels of the yardstick modes (the ``physical`` mode is :mod:`seahaze.render.physical`)
     ``reference``  Mitsuba ``volpath`` through the haze box: unbiased, slow, noisy at low spp.
-    ``asm``        The atmospheric scattering model ``I = J t + A (1 - t)`` with
-                   ``t = exp(-sigma L)``, ``J`` the clean radiance and ``L`` the length of the
-                   camera ray inside the haze layer (the exact distance for surfaces below the
-                   haze top; for the sky the path up to the layer top). ``A`` is the level's
-                   horizon airlight: a ``volpath`` render of a narrow horizontal view at the
-                   camera height, where the haze is optically thick at every level.
+    ``asm``        The atmospheric scattering model (:func:`seahaze.haze.asm_composite`) with the
+                   exact path length of each pixel's ray in the layer and the level's horizon
+                   airlight: a ``volpath`` render of a narrow horizontal view at the camera
+                   height, where the haze is optically thick at every level.
 """
 
 from __future__ import annotations
@@ -21,9 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from ..scattering import slab_interval
-from ..spec import HazeSpec, RenderSpec
-from .mitsuba_scene import HAZE_BOTTOM_M, Extinction, LoadedScene, extinction_rgb
+from ..haze import HAZE_BOTTOM_M, Extinction, asm_composite, path_length_in_slab
+from ..seeds import RenderPass, render_seed
+from .scene import LoadedScene
 
 GEOMETRY_MAX_CROSSINGS = 16
 """Surfaces a pixel ray walks through: the haze box (twice at most) and vessels behind vessels."""
@@ -44,19 +40,23 @@ class GeometryPass:
     footprint_px: np.ndarray | None = None
     """Per vessel, the pixels whose ray meets it anywhere before the sea: its unoccluded size."""
 
+    def elevation_deg(self) -> np.ndarray:
+        """(H, W) elevation of every pixel-centre ray above the horizontal (deg)."""
+        return np.degrees(np.arcsin(np.clip(self.directions[..., 2], -1.0, 1.0)))
 
-def _seed(base: int, *parts: int) -> int:
-    """A 31-bit render seed derived from the scene seed and the pass, so passes never share "
-    "noise."""
-    seq = np.random.SeedSequence([base, *parts])
-    return int(seq.generate_state(1, dtype=np.uint32)[0] & 0x7FFFFFFF)
+    def haze_path_length(self, top_m: float, bottom_m: float = HAZE_BOTTOM_M) -> np.ndarray:
+        """(H, W) length (m) of each pixel-centre ray inside the haze layer, up to its surface
+        (:func:`seahaze.haze.path_length_in_slab`)."""
+        return path_length_in_slab(
+            float(self.origin[2]), self.directions[..., 2], self.distance_m, top_m, bottom_m
+        )
 
 
 def render_geometry(loaded: LoadedScene) -> GeometryPass:
     """Trace one ray per pixel centre, passing through the haze box's null surface.
 
-    Mitsuba's ``aov`` integrator stops at null shapes (DESIGN.md §4), so the rays are traced here
-    with ``scene.ray_intersect`` and continued past the haze box.
+    Mitsuba's ``aov`` integrator stops at null shapes, so the rays are traced here with
+    ``scene.ray_intersect`` and continued past the haze box.
     """
     import drjit as dr
     import mitsuba as mi
@@ -142,7 +142,7 @@ def render_radiance(
 def render_clean(loaded: LoadedScene, spp: int, seed: int, albedo: float, g: float) -> np.ndarray:
     """Haze-free radiance: the same scene with the medium's extinction set to zero."""
     loaded.set_haze(0.0, albedo, g)
-    return render_radiance(loaded, spp, _seed(seed, 0))
+    return render_radiance(loaded, spp, render_seed(seed, RenderPass.CLEAN))
 
 
 def render_reference_level(
@@ -156,13 +156,14 @@ def render_reference_level(
 ) -> np.ndarray:
     """Hazy radiance by brute-force volumetric path tracing (``volpath``)."""
     loaded.set_haze(sigma, albedo, g)
-    return render_radiance(loaded, spp, _seed(seed, 1, level_index))
+    pass_seed = render_seed(seed, RenderPass.REFERENCE_LEVEL, level_index)
+    return render_radiance(loaded, spp, pass_seed)
 
 
 @dataclass(frozen=True)
 class Airlight:
-    """The horizon airlight of one level (linear RGB radiance) and its Monte Carlo standard "
-    "error."""
+    """The horizon airlight of one level (linear RGB radiance) and its Monte Carlo standard
+    error."""
 
     rgb: np.ndarray
     stderr: np.ndarray
@@ -185,26 +186,18 @@ def render_airlight(
     per_batch = max(1, spp // AIRLIGHT_BATCHES)
     means = np.stack(
         [
-            render_radiance(loaded, per_batch, _seed(seed, 2, level_index, b), sensor_index=1)
+            render_radiance(
+                loaded,
+                per_batch,
+                render_seed(seed, RenderPass.AIRLIGHT, level_index, b),
+                sensor_index=1,
+            )
             .reshape(-1, 3)
             .mean(axis=0)
             for b in range(AIRLIGHT_BATCHES)
         ]
     )
     return Airlight(means.mean(axis=0), means.std(axis=0, ddof=1) / np.sqrt(AIRLIGHT_BATCHES))
-
-
-def haze_path_length(geometry: GeometryPass, bottom_m: float, top_m: float) -> np.ndarray:
-    """Length (m) of each camera ray inside the haze layer ``bottom_m <= z <= top_m``.
-
-    A ray ends at its surface distance (``inf`` for the sky); only the part inside the layer
-    attenuates. Exact for a straight ray and a horizontally unbounded layer.
-    """
-    enter, leave = slab_interval(
-        float(geometry.origin[2]), geometry.directions[..., 2], bottom_m, top_m
-    )
-    stop = np.minimum(leave, geometry.distance_m.astype(np.float64))
-    return np.maximum(stop - enter, 0.0)
 
 
 def asm_level(
@@ -214,62 +207,6 @@ def asm_level(
     airlight_rgb: np.ndarray,
     top_m: float,
 ) -> np.ndarray:
-    """Hazy radiance by the atmospheric scattering model ``I = J t + A (1 - t)``, with
-    ``t = exp(-sigma_c L)`` per channel."""
-    length = haze_path_length(geometry, HAZE_BOTTOM_M, top_m)
-    t = np.exp(-extinction_rgb(sigma)[None, None, :] * length[..., None])
-    return (clean * t + airlight_rgb[None, None, :] * (1.0 - t)).astype(np.float32)
-
-
-@dataclass
-class LevelRender:
-    """One hazy level's linear radiance and what the mode measured on the way."""
-
-    radiance: np.ndarray
-    """(H, W, 3) float32 linear RGB radiance."""
-    airlight: Airlight | None = None
-    """The horizon airlight (``asm`` only)."""
-
-
-def render_level(
-    mode: str,
-    loaded: LoadedScene,
-    geometry: GeometryPass,
-    clean: np.ndarray,
-    sigma: Extinction,
-    haze: HazeSpec,
-    render: RenderSpec,
-    level_index: int,
-) -> LevelRender:
-    """Render one hazy level of extinction ``sigma`` (1/m, grey or per channel R, G, B) in
-    ``mode`` (physical/reference/asm).
-
-    The single entry point for every caller (pipeline, verify, benchmarks), so a mode behaves
-    the same everywhere. ``clean`` and ``geometry`` are the scene's clean and geometry passes.
-    """
-    if mode == "reference":
-        radiance = render_reference_level(
-            loaded, sigma, haze.albedo, haze.g, render.spp, render.seed, level_index
-        )
-        return LevelRender(radiance)
-    if mode == "asm":
-        airlight = render_airlight(
-            loaded, sigma, haze.albedo, haze.g, render.airlight_spp, render.seed, level_index
-        )
-        return LevelRender(asm_level(clean, geometry, sigma, airlight.rgb, haze.top_m), airlight)
-    if mode == "physical":
-        from .physical import PhysicalRenderer
-
-        if loaded.spec is None or loaded.has_haze_box:
-            raise ValueError(
-                "the physical mode needs a scene from build_scene(..., haze_box=False): it "
-                "computes the haze itself, and a Mitsuba medium would be crossed as a surface"
-            )
-        renderer = loaded.cache.get("physical")
-        if renderer is None:
-            renderer = loaded.cache["physical"] = PhysicalRenderer(loaded, loaded.spec)
-        radiance, _ = renderer.render(
-            sigma, haze.albedo, haze.g, render.spp, _seed(render.seed, 3, level_index)
-        )
-        return LevelRender(radiance)
-    raise ValueError(f"unknown render mode {mode!r}; allowed: physical, reference, asm")
+    """Hazy radiance by the atmospheric scattering model from the clean radiance, the exact
+    path lengths of the geometry pass and the level's airlight."""
+    return asm_composite(clean, geometry.haze_path_length(top_m), sigma, airlight_rgb)

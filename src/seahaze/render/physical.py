@@ -11,7 +11,7 @@ the next surface or out to the sky):
   - *single scattering* of the sun and sky: a direction from the scene's emitter sampling, a
     shadow ray against the vessels and the sea, the analytic transmittance of the slab toward
     the emitter, and the Henyey–Greenstein phase function — no all-or-nothing transmittance
-    estimate, which is what makes ``volpath`` so noisy (DESIGN.md §3);
+    estimate, which is what makes ``volpath`` so noisy (docs/physics.md);
   - the *diffuse field* (multiply scattered and sea-reflected light) looked up in a table of
     height × direction computed once per level (:mod:`seahaze.render.diffuse_table`).
 
@@ -34,10 +34,12 @@ from typing import Any
 
 import numpy as np
 
-from ..scattering import FOUR_PI
+from ..haze import HAZE_BOTTOM_M, Extinction, extinction_rgb
 from ..spec import SceneSpec
+from . import jit_haze
 from .diffuse_table import DEFAULT_GRID, DiffuseTable, TableGrid, build_diffuse_table
-from .mitsuba_scene import HAZE_BOTTOM_M, Extinction, LoadedScene, extinction_rgb, sunsky_dict
+from .passes import render_radiance
+from .scene import LoadedScene, sunsky_dict
 
 DEFAULT_BOUNCES = 3
 """Surface interactions per camera path: sea → sky, vessel → sea → sky. Measured on the
@@ -195,15 +197,7 @@ def make_integrator(
         # -- slab helpers ---------------------------------------------------------------
         def slab(self, oz: Any, dz: Any) -> tuple[Any, Any]:
             """``[enter, leave]`` ray parameters inside the slab (enter ≥ 0)."""
-            inv = dr.rcp(dz)
-            s_bottom = (self.bottom - oz) * inv
-            s_top = (self.top - oz) * inv
-            flat = dr.abs(dz) < 1e-7
-            inside = (oz >= self.bottom) & (oz <= self.top)
-            inf = dr.inf
-            enter = dr.select(flat, dr.select(inside, 0.0, inf), dr.minimum(s_bottom, s_top))
-            leave = dr.select(flat, dr.select(inside, inf, -inf), dr.maximum(s_bottom, s_top))
-            return dr.maximum(enter, 0.0), leave
+            return jit_haze.slab_interval(oz, dz, self.bottom, self.top)
 
         def transmittance_to_infinity(self, p: Any, d: Any) -> Any:
             enter, leave = self.slab(p.z, d.z)
@@ -211,9 +205,7 @@ def make_integrator(
             return dr.exp(-self.sigma * length)
 
         def phase(self, cos_theta: Any) -> Any:
-            g = self.g
-            denom = 1.0 + g * g - 2.0 * g * cos_theta
-            return (1.0 - g * g) / (FOUR_PI * denom * dr.sqrt(denom))
+            return jit_haze.hg_phase(cos_theta, self.g)
 
         def diffuse(self, z: Any, travel: Any) -> Any:
             """Table lookup of the diffuse in-scattering toward travel direction ``travel``."""
@@ -399,8 +391,6 @@ class PhysicalRenderer:
     ) -> tuple[np.ndarray, PhysicalLevel]:
         """Linear RGB radiance (H, W, 3) of one level; ``sigma`` as in :meth:`table`."""
         import time
-
-        from .passes import render_radiance
 
         start = time.perf_counter()
         table = self.table(sigma, albedo, g, seed)

@@ -21,6 +21,7 @@ from seahaze.vessels.library import (
     VesselClass,
     build_vessel,
     class_id,
+    length_problem,
 )
 from seahaze.vessels.materials import Material
 from seahaze.vessels.model import VesselModel, VesselPart
@@ -46,6 +47,7 @@ __all__ = [
     "VesselPart",
     "build_vessel",
     "class_id",
+    "length_problem",
     "load_user_mesh",
     "mesh_search_dirs",
     "place_explicit",

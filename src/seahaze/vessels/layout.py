@@ -38,7 +38,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from seahaze.vessels.library import CLASS_NAMES, get_class
+from seahaze.vessels.library import CLASS_NAMES, get_class, length_problem
 from seahaze.vessels.materials import Material
 from seahaze.vessels.model import VesselModel
 
@@ -214,7 +214,7 @@ def place_explicit(
     placements: list[Placement] = []
     for item in items:
         kind = str(_field(item, "kind"))
-        vc = get_class(kind)
+        get_class(kind)  # an unknown kind fails here, naming the allowed ones
         distance = float(_field(item, "distance_m"))
         if distance <= 0.0:
             raise ValueError(f"{kind}: distance_m must be > 0, got {distance:g}")
@@ -224,11 +224,9 @@ def place_explicit(
             raise ValueError(f"{kind}: a user mesh (beam_m given) needs its length_m")
         if length is None:
             length = _sample_length(kind, rng)
-        lo, hi = vc.length_range_m
-        if beam is None and not lo <= float(length) <= hi:
-            raise ValueError(
-                f"{kind} length {float(length):g} m is outside the class range [{lo:g}, {hi:g}] m"
-            )
+        problem = None if beam is not None else length_problem(kind, float(length))
+        if problem is not None:
+            raise ValueError(problem)
         placements.append(
             _placement(
                 kind,

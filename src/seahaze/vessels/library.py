@@ -293,18 +293,23 @@ def get_class(kind: str) -> VesselClass:
         ) from None
 
 
+def length_problem(kind: str, length_m: float) -> str | None:
+    """Why ``length_m`` does not fit the class ``kind`` (None when it lies in its range)."""
+    lo, hi = get_class(kind).length_range_m
+    if lo <= float(length_m) <= hi:
+        return None
+    return f"{kind} length {float(length_m):g} m is outside the {kind} range [{lo:g}, {hi:g}] m"
+
+
 def _checked_length(
     vessel_class: VesselClass, length_m: float | None, rng: np.random.Generator
 ) -> float:
-    lo, hi = vessel_class.length_range_m
     if length_m is None:
-        return float(rng.uniform(lo, hi))
-    length = float(length_m)
-    if not (lo <= length <= hi):
-        raise ValueError(
-            f"{vessel_class.name} length {length:g} m is outside the class range [{lo:g}, {hi:g}] m"
-        )
-    return length
+        return float(rng.uniform(*vessel_class.length_range_m))
+    problem = length_problem(vessel_class.name, length_m)
+    if problem is not None:
+        raise ValueError(problem)
+    return float(length_m)
 
 
 def sample_dimensions(kind: str, length_m: float | None, rng: np.random.Generator) -> PrincipalDims:

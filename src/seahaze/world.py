@@ -1,24 +1,30 @@
-"""Scene geometry from a validated spec: the sea mesh and the placed vessel meshes.
+"""The world a scene spec describes: the sun's direction, the sea mesh and the placed vessels.
 
 This is the step between the spec and the renderer: plain numpy meshes and materials, no
-Mitsuba. Seeds for the sea and the layout derive from ``render.seed`` unless the spec gives its
-own, so one master seed reproduces a whole scene. Explicit vessels with a ``mesh`` are loaded
-from the user's file (``sceneio`` has already resolved and checked the path of a scene file).
+Mitsuba. World frame: Z up, metres, mean sea level at z = 0, the camera above the origin;
+azimuths and headings counter-clockwise from +x seen from above. Seeds for the sea and the layout
+derive from ``render.seed`` (:mod:`seahaze.seeds`) unless the spec gives its own, so one master
+seed reproduces a whole scene. Explicit vessels with a ``mesh`` are loaded from the user's file
+(``sceneio`` has already resolved and checked the path of a scene file).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from . import ocean, vessels
 from .camera import Camera
+from .seeds import Stream, stream_rng, stream_seed
 from .spec import SceneSpec
 
-SEA_SEED_STREAM = 1
-LAYOUT_SEED_STREAM = 2
-VESSEL_SEED_STREAM = 3
+
+def sun_direction(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
+    """Unit vector toward the sun (world frame, Z up, azimuth counter-clockwise from +x)."""
+    e, a = math.radians(elevation_deg), math.radians(azimuth_deg)
+    return np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)])
 
 
 @dataclass
@@ -57,13 +63,6 @@ class SceneGeometry:
     vessels: list[VesselInstance]
 
 
-def derived_seed(master: int, stream: int, explicit: int | None = None) -> int:
-    """The seed of one random stream: ``explicit`` when given, else derived from the master seed."""
-    if explicit is not None:
-        return explicit
-    return int(np.random.SeedSequence([master, stream]).generate_state(1)[0])
-
-
 def ocean_params(spec: SceneSpec) -> ocean.OceanParams:
     """Ocean generator parameters for a scene (Beaufort force, when given, sets the wind)."""
     sea = spec.sea
@@ -75,7 +74,7 @@ def ocean_params(spec: SceneSpec) -> ocean.OceanParams:
         fetch_km=sea.fetch_km,
         direction_deg=sea.direction_deg,
         choppiness=sea.choppiness,
-        seed=derived_seed(spec.render.seed, SEA_SEED_STREAM, sea.seed),
+        seed=stream_seed(spec.render.seed, Stream.SEA, sea.seed),
         time_s=sea.time_s,
     )
 
@@ -132,7 +131,7 @@ def layout_vessels(
     real length and beam, so their footprints are right.
     """
     user_models = load_user_meshes(spec) if user_models is None else user_models
-    rng = np.random.default_rng(derived_seed(spec.render.seed, LAYOUT_SEED_STREAM))
+    rng = stream_rng(spec.render.seed, Stream.LAYOUT)
     items = [
         vessels.ExplicitVessel(
             p.kind,
@@ -147,9 +146,7 @@ def layout_vessels(
     placements = vessels.place_explicit(items, camera.heading_deg, rng) if items else []
     sampler = spec.vessels.sample
     if sampler is not None and sampler.count > 0:
-        rng = np.random.default_rng(
-            derived_seed(spec.render.seed, LAYOUT_SEED_STREAM, sampler.seed)
-        )
+        rng = stream_rng(spec.render.seed, Stream.LAYOUT, sampler.seed)
         weights = sampler.classes or dict.fromkeys(vessels.CLASS_NAMES, 1.0)
         # The spec gives a half-width; the layout takes the full width of the bearing range.
         spread = (
@@ -182,7 +179,7 @@ def build_vessels(
     longer than the waves bridges them instead of following every ripple.
     """
     user_models = load_user_meshes(spec)
-    rng = np.random.default_rng(derived_seed(spec.render.seed, VESSEL_SEED_STREAM))
+    rng = stream_rng(spec.render.seed, Stream.VESSELS)
     instances = []
     for index, placement in enumerate(layout_vessels(spec, camera, user_models)):
         # Explicit vessels come first in the layout, so index i < len(placed) is placed[i].

@@ -23,10 +23,7 @@ import yaml
 from PIL import Image, UnidentifiedImageError
 
 from seahaze.metric.errors import MetricInputError, located
-from seahaze.visibility import level_name
-
-CLEAN = "clean"
-"""Folder name of the haze-free level."""
+from seahaze.visibility import CLEAN_LEVEL, is_level_name, level_name
 
 IMAGE_SUFFIXES: tuple[str, ...] = (".png", ".jpg", ".jpeg")
 """Image files recognised in ``images/<level>/`` (the renderer writes PNG)."""
@@ -41,7 +38,7 @@ def level_visibility_m(level: str) -> float | None:
 
     Raises :class:`MetricInputError` for any other name.
     """
-    if level == CLEAN:
+    if level == CLEAN_LEVEL:
         return None
     match = _LEVEL.match(level)
     if not match or int(match[1]) <= 0:
@@ -49,18 +46,12 @@ def level_visibility_m(level: str) -> float | None:
     return float(int(match[1]))
 
 
-def is_level_name(name: str) -> bool:
-    """Whether ``name`` is a level folder name (``clean`` or ``v`` + a positive integer)."""
-    match = _LEVEL.match(name)
-    return name == CLEAN or (match is not None and int(match[1]) > 0)
-
-
 def parse_level(text: str) -> str:
     """The level folder for a ``--level`` argument: ``800``, ``800m``, ``v800``, ``v0800`` →
     ``v0800``; ``clean`` → ``clean``. Raises :class:`MetricInputError` otherwise."""
     value = text.strip()
-    if value.lower() == CLEAN:
-        return CLEAN
+    if value.lower() == CLEAN_LEVEL:
+        return CLEAN_LEVEL
     match = _LEVEL_ARG.match(value)
     if not match or float(match[1]) <= 0 or not float(match[1]).is_integer():
         raise MetricInputError(
@@ -196,7 +187,7 @@ class Dataset:
     @property
     def hazy_levels(self) -> tuple[str, ...]:
         """The levels with a visibility (all but ``clean``), by increasing visibility."""
-        return tuple(lv for lv in self.levels if lv != CLEAN)
+        return tuple(lv for lv in self.levels if lv != CLEAN_LEVEL)
 
 
 @dataclass(frozen=True)

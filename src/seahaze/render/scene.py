@@ -2,34 +2,30 @@
 
 The scene holds: a perspective camera near the origin, a tiny horizon camera for the ASM
 airlight, the ``sunsky`` emitter, the sea and vessel meshes, and a box with a null BSDF whose
-interior is the haze medium (DESIGN.md §4: a fog attached only to the sensor receives no light).
-The box spans ``[-W, W]^2`` horizontally with ``sigma_min * W >= 8`` for the thinnest haze of the
-run, so light entering through its sides is attenuated by at least ``e^-8``; vertically it runs
-from below the sea surface to the haze top. The medium is changed per level through
-``mi.traverse`` (no reload, no recompilation); the clean pass sets its extinction to zero.
+interior is the haze medium (a fog attached only to the sensor is unbounded and receives no
+light). The box is sized by :func:`seahaze.haze.haze_box_half_width` for the thinnest haze of the
+run; vertically it runs from below the sea surface to the haze top. The medium is changed per
+level through ``mi.traverse`` (no reload, no recompilation); the clean pass sets its extinction
+to zero. The ``physical`` mode computes the haze itself and loads the scene without the box.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ..camera import Camera
-from ..geometry import MeshData, SceneGeometry
+from ..haze import HAZE_BOTTOM_M, Extinction, extinction_rgb, haze_box_half_width
 from ..spec import SceneSpec
-from ..visibility import ExtinctionSpectrum, channel_extinction
+from ..visibility import channel_extinction
+from ..world import MeshData, SceneGeometry, sun_direction
 
 HAZE_ID = "haze"
 HAZE_BOX_ID = "haze_box"
-BOX_OPTICAL_HALF_WIDTH = 8.0
-"""Minimum optical depth ``sigma * W`` from the camera to the side of the haze box (DESIGN.md "
-"§4)."""
-HAZE_BOTTOM_M = -60.0
-"""Bottom of the haze box below sea level; the sea surface hides everything beneath it."""
 FAR_CLIP_M = 1.0e7
+"""The perspective sensor's far clip (Mitsuba's default of 10 km would cut the far sea)."""
 AIRLIGHT_FOV_DEG = 0.5
 AIRLIGHT_RES = 8
 
@@ -38,35 +34,6 @@ def _mi():
     import mitsuba as mi
 
     return mi
-
-
-def sun_direction(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
-    """Unit vector toward the sun (world frame, Z up, azimuth counter-clockwise from +x)."""
-    e, a = math.radians(elevation_deg), math.radians(azimuth_deg)
-    return np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)])
-
-
-def haze_box_half_width(
-    visibilities_m: list[float],
-    threshold: str,
-    spectrum: ExtinctionSpectrum | str = ExtinctionSpectrum.GREY,
-) -> float:
-    """Horizontal half-width (m) of the haze box so that ``sigma * W >= 8`` at every level, in
-    the channel of least extinction."""
-    sigma_min = min(channel_extinction(v, threshold, spectrum).min() for v in visibilities_m)
-    return BOX_OPTICAL_HALF_WIDTH / float(sigma_min)
-
-
-Extinction = float | np.ndarray
-"""A level's extinction in 1/m: one grey value or (R, G, B) (``haze.extinction_spectrum``)."""
-
-
-def extinction_rgb(sigma_t: Extinction) -> np.ndarray:
-    """Per-channel extinction (3,) in 1/m from one grey value or an (R, G, B) triple."""
-    rgb = np.broadcast_to(np.asarray(sigma_t, dtype=float), (3,)).copy()
-    if not np.all(np.isfinite(rgb)) or np.any(rgb < 0.0):
-        raise ValueError(f"extinction must be finite and non-negative, got {rgb}")
-    return rgb
 
 
 def _sensor_dict(
@@ -170,8 +137,6 @@ class LoadedScene:
     """Mitsuba shape registry id → vessel index (the sea and the haze box map to -1, -2)."""
     spec: SceneSpec | None = None
     """The scene spec it was built from (the ``physical`` mode needs the sun and sky)."""
-    cache: dict[str, Any] = field(default_factory=dict)
-    """Per-scene objects that passes build once and reuse across levels."""
 
     @property
     def has_haze_box(self) -> bool:
@@ -209,8 +174,10 @@ def build_scene(
     *,
     black_vessels: bool = False,
     haze_box: bool = True,
+    reach_m: float = 0.0,
 ) -> LoadedScene:
-    """Load the Mitsuba scene for ``spec`` with a haze box wide enough for ``visibilities_m``.
+    """Load the Mitsuba scene for ``spec`` with a haze box wide enough for ``visibilities_m``
+    and objects out to ``reach_m`` (:func:`seahaze.haze.haze_box_half_width`).
 
     ``black_vessels`` gives every vessel part :data:`BLACK_BSDF` instead of painted steel (the
     black calibration targets of ``seahaze verify``). ``haze_box=False`` leaves the Mitsuba
@@ -219,9 +186,12 @@ def build_scene(
     """
     mi = _mi()
     top = spec.haze.top_m
-    half_width = haze_box_half_width(
-        visibilities_m or [1.0e4], spec.haze.threshold, spec.haze.extinction_spectrum
+    haze = spec.haze
+    sigma_min = min(
+        channel_extinction(v, haze.threshold, haze.extinction_spectrum).min()
+        for v in visibilities_m or [1.0e4]
     )
+    half_width = haze_box_half_width(sigma_min, reach_m)
     inside = camera.height_m < top and haze_box
     scene: dict[str, Any] = {
         "type": "scene",

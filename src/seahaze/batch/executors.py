@@ -1,0 +1,267 @@
+"""Where the scenes of a batch render: in this process, in local worker processes, or as
+tasks on a Dask cluster. Each executor yields ``(scene name, SceneDone or exception)``."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import threading
+import time
+import uuid
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ..dataset.layout import Layout
+from ..dataset.writer import write_scene
+from ..render.engine import render_scene
+from ..spec import SceneSpec
+from .errors import BatchRefusedError
+from .plan import SceneJob
+
+DASK_CONNECT_TIMEOUT_S = 15
+"""How long to try reaching a Dask scheduler before giving up."""
+
+
+@dataclass
+class SceneDone:
+    """A scene rendered and written: its name and wall-clock seconds per pass."""
+
+    name: str
+    timings: dict[str, float]
+
+
+def render_job(name: str, spec_data: dict[str, Any], root: str) -> SceneDone:
+    """Render one scene of a batch and write its files: the task a worker process or a Dask
+    worker runs.
+
+    The spec travels as plain JSON data and is validated again here, so a worker with another
+    pydantic build still renders exactly the planned scene. The render selects the Mitsuba
+    variant in the worker itself (Mitsuba and drjit state is per process); only the small
+    :class:`SceneDone` travels back.
+    """
+    start = time.perf_counter()
+    scene = render_scene(SceneSpec.model_validate(spec_data), name)
+    write_scene(Layout(Path(root)), scene)
+    scene.timings["total"] = time.perf_counter() - start
+    return SceneDone(name, scene.timings)
+
+
+Outcome = tuple[str, "SceneDone | BaseException"]
+
+
+class _InProcess:
+    """Scenes rendered one after another in this process (``--workers 1``)."""
+
+    def __init__(self, jobs: Sequence[SceneJob], root: Path, note: Callable[[str], None]):
+        self.jobs, self.root, self.note = jobs, root, note
+        self._stop = False
+
+    def results(self) -> Iterator[Outcome]:
+        signalled = threading.Event()
+        restore = _flag_ignored_sigint(signalled)
+        try:
+            for job in self.jobs:
+                if self._stop:
+                    return
+                yield job.name, self._render(job, signalled)
+        finally:
+            restore()
+
+    def _render(self, job: SceneJob, signalled: threading.Event) -> SceneDone | Exception:
+        for _attempt in range(3):
+            signalled.clear()
+            start = time.perf_counter()
+            try:
+                scene = render_scene(job.spec, job.name, self.note)
+                # Files are written only after the whole scene rendered, so a render cut short
+                # by an ignored SIGINT never reaches the folder.
+                if not signalled.is_set():
+                    write_scene(Layout(self.root), scene)
+            except Exception as err:  # a scene's failure is recorded, not raised
+                return err
+            if not signalled.is_set():
+                scene.timings["total"] = time.perf_counter() - start
+                return SceneDone(job.name, scene.timings)
+            self.note(f"{job.name}: SIGINT (ignored) may have cut a render short; again")
+        return RuntimeError("repeated SIGINT while rendering; rerun to render this scene")
+
+    def cancel(self) -> None:
+        self._stop = True
+
+    def abort(self) -> None:
+        self._stop = True
+
+    def close(self) -> None:
+        pass
+
+
+def _flag_ignored_sigint(signalled: threading.Event) -> Callable[[], None]:
+    """Where SIGINT is ignored (a background job), note it instead; returns the undo function.
+
+    During a render Mitsuba installs its own SIGINT handler that cancels the render and then
+    passes the signal on: to Python's handler (KeyboardInterrupt, nothing is written) or, when
+    SIGINT is ignored, to nobody, so the render returns cut short without an error. Noting the
+    signal lets the scene be rendered again instead of written incomplete.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+        return lambda: None
+    signal.signal(signal.SIGINT, lambda _signum, _frame: signalled.set())
+    return lambda: signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _worker_init(parent_pid: int, threads: int) -> None:
+    """Set up a local worker process: own process group, drjit thread count, die with parent."""
+    # Ctrl-C at a terminal signals the foreground process group: keep the workers out of it, so
+    # the coordinator alone decides (it terminates them). A SIGINT sent to a worker directly
+    # raises KeyboardInterrupt (never ignored: see _flag_ignored_sigint) and fails its scene.
+    os.setpgrp()
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    from ..render.variant import find_libllvm
+
+    llvm = find_libllvm()
+    if llvm:  # drjit reads it when its LLVM backend starts
+        os.environ.setdefault("DRJIT_LIBLLVM_PATH", llvm)
+    import drjit as dr
+
+    # K workers on N cores: N/K threads each, not N each (oversubscription slows all of them).
+    dr.set_thread_count(threads)
+
+    def watch() -> None:
+        # A SIGKILLed coordinator cannot stop its workers; they notice the new parent and quit.
+        while os.getppid() == parent_pid:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True, name="seahaze-parent-watch").start()
+
+
+class _LocalPool:
+    """Scenes rendered in ``workers`` spawned processes (Mitsuba and drjit are not fork-safe)."""
+
+    def __init__(self, jobs: Sequence[SceneJob], root: Path, workers: int):
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
+        self.executor = ProcessPoolExecutor(
+            max_workers=workers,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_worker_init,
+            initargs=(os.getpid(), max(1, (cores or 1) // workers)),
+        )
+        self.futures = {
+            self.executor.submit(
+                render_job, job.name, job.spec.model_dump(mode="json", by_alias=True), str(root)
+            ): job.name
+            for job in jobs
+        }
+
+    def results(self) -> Iterator[Outcome]:
+        from concurrent.futures import as_completed
+
+        for future in as_completed(self.futures):
+            if future.cancelled():
+                continue
+            error = future.exception()
+            yield self.futures[future], error if error is not None else future.result()
+
+    def cancel(self) -> None:
+        for future in self.futures:
+            future.cancel()
+
+    def abort(self) -> None:
+        self.cancel()
+        # Renders are atomic and deterministic, so killing a worker mid-scene loses nothing
+        # but that scene's time; waiting for it could take minutes.
+        for process in list(getattr(self.executor, "_processes", {}).values()):
+            with contextlib.suppress(Exception):
+                process.terminate()
+
+    def close(self) -> None:
+        self.executor.shutdown(wait=True, cancel_futures=True)
+
+
+def connect_dask(scheduler: str) -> Any:
+    """A ``distributed.Client`` of the scheduler at ``scheduler``.
+
+    Raises :class:`BatchRefusedError` when dask.distributed is missing or the scheduler cannot
+    be reached in :data:`DASK_CONNECT_TIMEOUT_S`.
+    """
+    try:
+        from distributed import Client
+    except ImportError:
+        raise BatchRefusedError(
+            "--executor dask needs dask.distributed: pip install 'dask[distributed]'"
+        ) from None
+    try:
+        return Client(scheduler, timeout=f"{DASK_CONNECT_TIMEOUT_S}s", set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as err:
+        raise BatchRefusedError(
+            f"cannot reach the Dask scheduler at {scheduler!r}: {err}"
+        ) from None
+
+
+class _DaskCluster:
+    """Scenes submitted as tasks to an existing Dask distributed scheduler."""
+
+    def __init__(self, jobs: Sequence[SceneJob], root: Path, client: Any):
+        self.client = client
+        self.futures = {}
+        for job in jobs:
+            future = self.client.submit(
+                render_job,
+                job.name,
+                job.spec.model_dump(mode="json", by_alias=True),
+                str(root),
+                key=f"seahaze-{job.name}-{uuid.uuid4().hex[:12]}",  # unique per run
+                pure=False,
+            )
+            self.futures[future.key] = (future, job.name)
+
+    def results(self) -> Iterator[Outcome]:
+        from distributed import as_completed
+
+        futures = [f for f, _ in self.futures.values()]
+        for future in as_completed(futures, loop=self.client.loop):
+            name = self.futures[future.key][1]
+            if future.status == "cancelled":
+                continue
+            if future.status == "error":
+                yield name, future.exception()
+            else:
+                yield name, future.result()
+
+    def cancel(self) -> None:
+        pending = [f for f, _ in self.futures.values() if not f.done()]
+        if pending:
+            self.client.cancel(pending)
+
+    def abort(self) -> None:
+        self.cancel()
+
+    def close(self) -> None:
+        pass  # the client belongs to run_batch
+
+
+Executor = _InProcess | _LocalPool | _DaskCluster
+
+
+def start_executor(
+    jobs: Sequence[SceneJob],
+    root: Path,
+    workers: int,
+    client: Any,
+    note: Callable[[str], None],
+) -> Executor:
+    """The executor for ``jobs``: the Dask cluster of ``client`` when given, else ``workers``
+    local processes (more than one), else this process (``note`` gets its per-pass messages)."""
+    if client is not None:
+        return _DaskCluster(jobs, root, client)
+    if workers > 1 and len(jobs) > 1:
+        return _LocalPool(jobs, root, min(workers, len(jobs)))
+    return _InProcess(jobs, root, note)

@@ -1,0 +1,152 @@
+"""Planning a batch: scene templates → scenes with their own seeds and varied parameters.
+
+Every scene file (a *template*) gives one scene, or with ``count`` (``seahaze render --scenes
+N``) N scenes named ``<template>_00000`` …, scene ``i`` drawing its camera heading, sun, sea
+state and vessel layout from the template's ``variation:`` ranges with a seed derived from
+(master seed, template name, ``i``) (:func:`seahaze.seeds.scene_seed`).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..seeds import scene_seed, variation_rng
+from ..spec import SceneSpec
+from .errors import DatasetError
+
+VARIED: dict[str, tuple[str, str]] = {
+    "camera_heading_deg": ("camera", "heading_deg"),
+    "sun_elevation_deg": ("sun", "elevation_deg"),
+    "sun_azimuth_deg": ("sun", "azimuth_deg"),
+    "wind_speed": ("sea", "wind_speed"),
+    "sea_direction_deg": ("sea", "direction_deg"),
+}
+"""Each ``variation`` range and the spec field it sets; the order fixes each one's stream."""
+
+
+@dataclass(frozen=True)
+class SceneJob:
+    """One scene of a batch: its name, its fully resolved spec and where it came from."""
+
+    name: str
+    spec: SceneSpec
+    template: str
+    index: int | None = None
+
+    def images(self) -> int:
+        """Images this scene writes: clean plus one per level."""
+        return 1 + len(self.spec.haze.levels)
+
+    def entry(self, status: str) -> dict[str, Any]:
+        """This scene's record in ``dataset.json``."""
+        return {
+            "status": status,
+            "seed": self.spec.render.seed,
+            "template": self.template,
+            "index": self.index,
+            "config": self.spec.model_dump(mode="json", by_alias=True),
+        }
+
+
+@dataclass(frozen=True)
+class BatchPlan:
+    """Every scene of a batch in its canonical order, plus what the manifest's config records."""
+
+    jobs: tuple[SceneJob, ...]
+    levels: tuple[float, ...]
+    threshold: str
+    count: int | None = None
+    master_seeds: dict[str, int] = field(default_factory=dict)
+
+    def config(self) -> dict[str, Any]:
+        """The manifest's ``config``: dataset-wide settings and, for ``--scenes``, the batch."""
+        first = self.jobs[0].spec
+        batch = (
+            None
+            if self.count is None
+            else {"scenes_per_template": self.count, "master_seeds": dict(self.master_seeds)}
+        )
+        return {
+            "threshold": self.threshold,
+            "mode": first.render.mode,
+            "spp": first.render.spp,
+            "resolution": list(first.camera.resolution),
+            "batch": batch,
+        }
+
+
+def vary_scene(spec: SceneSpec, seed: int) -> SceneSpec:
+    """The scene of a batch with seed ``seed``: ``spec`` with its ``variation`` ranges sampled.
+
+    Every varied quantity has its own random stream, so adding a range to a template does not
+    change the values drawn for the others. Values are rounded to 1e-3 (they stay inside their
+    ranges, whose ends the schema holds to at most three decimals' worth of meaning).
+    """
+    variation = spec.variation
+    data = spec.model_dump(mode="json", by_alias=True)
+    data["render"]["seed"] = seed
+    for k, key in enumerate(VARIED):
+        bounds = getattr(variation, key)
+        if bounds is None:
+            continue
+        low, high = bounds
+        value = min(max(round(float(variation_rng(seed, k).uniform(low, high)), 3), low), high)
+        section, name = VARIED[key]
+        data[section][name] = value
+        if key == "wind_speed":
+            data["sea"]["beaufort"] = None  # a Beaufort force would override the drawn wind
+    if variation.resample_sea:
+        data["sea"]["seed"] = None  # derived from the scene's render.seed (seahaze.world)
+    if variation.resample_layout and data["vessels"].get("sample") is not None:
+        data["vessels"]["sample"]["seed"] = None
+    return SceneSpec.model_validate(data)
+
+
+def plan_scenes(
+    templates: Sequence[tuple[SceneSpec, str]],
+    count: int | None = None,
+    master_seed: int | None = None,
+) -> BatchPlan:
+    """The scenes of a batch, in canonical order: templates in the given order, then index.
+
+    ``count`` None: one scene per template, as written. ``count`` N: N scenes per template named
+    ``<template>_<i>`` (5 digits or more), each with :func:`seahaze.seeds.scene_seed` of the
+    master seed (``master_seed``, else the template's ``render.seed``) and :func:`vary_scene`
+    applied. Raises :class:`DatasetError` for scenes that cannot share one dataset.
+    """
+    if not templates:
+        raise DatasetError("no scene to render")
+    if count is not None and count < 1:
+        raise DatasetError(f"the number of scenes must be >= 1, got {count}")
+    first, first_name = templates[0]
+    for spec, name in templates[1:]:
+        if (
+            list(spec.haze.levels) != list(first.haze.levels)
+            or spec.haze.threshold != first.haze.threshold
+        ):
+            raise DatasetError(
+                f"scene '{name}' has other haze levels or threshold than '{first_name}'; "
+                "pass --vis to use the same levels"
+            )
+    jobs: list[SceneJob] = []
+    seeds: dict[str, int] = {}
+    if count is None:
+        jobs = [SceneJob(name, spec, name) for spec, name in templates]
+    else:
+        width = max(5, len(str(count - 1)))
+        for spec, name in templates:
+            master = spec.render.seed if master_seed is None else master_seed
+            seeds[name] = master
+            for i in range(count):
+                seed = scene_seed(master, name, i)
+                jobs.append(SceneJob(f"{name}_{i:0{width}d}", vary_scene(spec, seed), name, i))
+    counts = Counter(job.name for job in jobs)
+    duplicates = sorted(name for name, n in counts.items() if n > 1)
+    if duplicates:
+        raise DatasetError(
+            f"two scenes share the name(s) {duplicates[:5]}; set 'name:' in the YAML"
+        )
+    return BatchPlan(tuple(jobs), tuple(first.haze.levels), str(first.haze.threshold), count, seeds)

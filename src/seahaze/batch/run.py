@@ -1,0 +1,363 @@
+"""Running a planned batch into a dataset folder: locked, resumable, atomic.
+
+Safety, in the order :func:`run_batch` does it:
+
+1. a lock file ``OUT/.seahaze.lock`` (:class:`~seahaze.batch.lock.DatasetLock`) refuses a second
+   process on the same folder; a lock left by a killed process is taken over with a message;
+2. temporary files a killed run left (``.<name>.tmp<pid>``) are removed;
+3. the plan is compared with the folder's manifest: another config is refused unless ``force``;
+4. ``dataset.json`` lists every planned scene in plan order with its state (``pending``,
+   ``done``, ``failed``) and is rewritten atomically after each scene, so a crash, SIGKILL or
+   Ctrl-C loses at most the scenes in flight and the same command later renders only what is
+   missing. Files are written atomically and carry no timestamps, so a resumed batch ends
+   byte-identical to an uninterrupted one whatever the worker count;
+5. a write error (full disk, I/O error) stops the batch, keeps finished scenes ``done`` and
+   reports it; another failure marks only its scene ``failed`` and the batch goes on.
+
+Only this (the coordinating) process writes ``dataset.json``. Timing goes only to the progress
+display and the optional JSON-lines log, never into the dataset.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import signal
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from .. import __version__
+from ..dataset import Layout, data_yaml_text, level_entries, manifest
+from ..fileio import write_json, write_text
+from ..metric.ground_truth import write_coco
+from ..vessels import CLASS_NAMES
+from ..visibility import CLEAN_LEVEL, level_name
+from .errors import ConfigChangedError
+from .executors import SceneDone, connect_dask, start_executor
+from .folder import (
+    describe_error,
+    differences,
+    prune,
+    read_manifest,
+    remove_temporaries,
+    with_current_defaults,
+)
+from .lock import DatasetLock
+from .plan import BatchPlan, SceneJob
+from .progress import Reporter
+from .report import BatchReport
+
+FATAL_ERRNOS = frozenset(
+    {
+        errno.ENOSPC,
+        errno.EDQUOT,
+        errno.EIO,
+        errno.EROFS,
+        errno.EFBIG,
+        errno.EACCES,
+        errno.EPERM,
+        errno.ESTALE,
+    }
+)
+"""Errors of the output storage: every later scene would hit them too, so the batch stops."""
+
+
+@dataclass(frozen=True)
+class BatchOptions:
+    """How a batch runs (none of it changes what it renders)."""
+
+    workers: int = 1
+    executor: Literal["local", "dask"] = "local"
+    scheduler: str | None = None
+    force: bool = False
+
+
+def run_batch(
+    plan: BatchPlan,
+    root: Path,
+    options: BatchOptions | None = None,
+    reporter: Reporter | None = None,
+) -> BatchReport:
+    """Render the planned scenes that ``root`` does not hold yet; see the module docstring.
+
+    Raises :class:`~seahaze.batch.errors.DatasetLockedError` or
+    :class:`~seahaze.batch.errors.ConfigChangedError` (nothing changed in the folder) and
+    :class:`~seahaze.batch.errors.BatchRefusedError` for a Dask scheduler that cannot be
+    reached. A storage error that prevents even starting (no permission to create ``root``)
+    propagates as ``OSError``. Every other outcome is in the returned report.
+    """
+    options = options or BatchOptions()
+    reporter = reporter or Reporter(quiet=True)
+    root = Path(root).resolve()
+    # Reach the cluster before touching the folder: a refusal leaves everything as it was.
+    client = connect_dask(options.scheduler or "") if options.executor == "dask" else None
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        with DatasetLock(root, reporter.warn):
+            started = time.perf_counter()
+            ledger = open_ledger(plan, root, options.force, reporter)
+            stop = render_pending(ledger, options, client, reporter)
+            return finish(ledger, stop, time.perf_counter() - started, reporter)
+    finally:
+        if client is not None:
+            with contextlib.suppress(Exception):
+                client.close()
+
+
+@dataclass
+class SceneLedger:
+    """The state of every planned scene of a locked batch, and the manifest it makes."""
+
+    plan: BatchPlan
+    layout: Layout
+    status: dict[str, str]
+    """Scene name → ``pending``, ``done`` or ``failed``, in plan order."""
+    done_before: int = 0
+    """Scenes already done when the batch started."""
+    errors: dict[str, str] = field(default_factory=dict)
+    rendered: list[str] = field(default_factory=list)
+    """Scenes rendered by this run, in the order they finished."""
+
+    @property
+    def jobs(self) -> dict[str, SceneJob]:
+        return {job.name: job for job in self.plan.jobs}
+
+    @property
+    def levels(self) -> list[dict[str, Any]]:
+        return level_entries(list(self.plan.levels), self.plan.threshold)
+
+    def manifest(self) -> dict[str, Any]:
+        """``dataset.json`` for the current states, scenes in plan order (never finish order)."""
+        scenes = {}
+        for job in self.plan.jobs:
+            scenes[job.name] = job.entry(self.status[job.name])
+            if job.name in self.errors:
+                scenes[job.name]["error"] = self.errors[job.name]
+        return manifest(self.plan.config(), self.levels, CLASS_NAMES, scenes)
+
+    def write_manifest(self) -> None:
+        """Write ``dataset.json`` atomically."""
+        write_json(self.layout.manifest, self.manifest())
+
+    def done(self) -> int:
+        return sum(s == "done" for s in self.status.values())
+
+
+def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) -> SceneLedger:
+    """Check the folder against the plan, clean it up, and find the scenes still to render.
+
+    Raises :class:`ConfigChangedError` (nothing changed) for a folder made with another config
+    unless ``force``. Writes ``data.yaml`` and the manifest of the planned scenes.
+    """
+    ledger = SceneLedger(plan, Layout(root), {job.name: "pending" for job in plan.jobs})
+    planned = ledger.manifest()
+    existing = read_manifest(ledger.layout.manifest, force)
+    if existing is not None:
+        existing = with_current_defaults(existing)
+    changes = differences(existing, planned) if existing is not None else []
+    if changes and not force:
+        shown = "\n  ".join(changes[:6])
+        more = f"\n  … and {len(changes) - 6} more" if len(changes) > 6 else ""
+        raise ConfigChangedError(
+            f"{root} holds a dataset made with another configuration:\n  {shown}{more}"
+            "\nRerun with --force to re-render what changed (unchanged scenes are kept, "
+            "files of scenes and levels no longer configured are deleted), or choose "
+            "another --out."
+        )
+    # From here on the folder is ours and its config is the planned one.
+    written_by = (existing or {}).get("seahaze_version")
+    if written_by and written_by != __version__:
+        reporter.warn(
+            f"{root} was written by seahaze {written_by}, this is {__version__}: "
+            "scenes rendered now may differ from those already done"
+        )
+    removed = remove_temporaries(root)
+    if removed:
+        reporter.note(f"removed {removed} temporary file(s) left by an interrupted run")
+    level_names = [entry["name"] for entry in ledger.levels]
+    if changes:
+        pruned = prune(root, set(ledger.status), {CLEAN_LEVEL, *level_names})
+        reporter.warn(
+            f"--force: the configuration changed ({len(changes)} difference(s)); deleted "
+            f"{pruned} file(s) of scenes or levels no longer configured"
+        )
+    _mark_done_scenes(ledger, (existing or {}).get("scenes") or {}, planned["scenes"], reporter)
+    pending = len(plan.jobs) - ledger.done_before
+    if ledger.done_before and pending:
+        reporter.note(
+            f"resuming: {ledger.done_before} of {len(plan.jobs)} scenes already done, "
+            f"{pending} to render"
+        )
+    write_text(ledger.layout.data_yaml, data_yaml_text(root, level_names, CLASS_NAMES))
+    ledger.write_manifest()
+    if pending:
+        # COCO files describe every scene of a level: stale until the last scene is done.
+        for level in [CLEAN_LEVEL, *level_names]:
+            ledger.layout.coco(level).unlink(missing_ok=True)
+    return ledger
+
+
+def _mark_done_scenes(
+    ledger: SceneLedger,
+    old_scenes: dict[str, Any],
+    planned_scenes: dict[str, Any],
+    reporter: Reporter,
+) -> None:
+    """Mark ``done`` the scenes the folder holds, finished, with the planned config."""
+    for job in ledger.plan.jobs:
+        old = old_scenes.get(job.name) or {}
+        entry = planned_scenes[job.name]
+        same = all(old.get(k) == v for k, v in entry.items() if k != "status")
+        if not (same and old.get("status") == "done"):
+            continue
+        levels = [level_name(v) for v in job.spec.haze.levels]
+        files = ledger.layout.scene_files(job.name, levels, job.spec.render.write_exr)
+        if all(path.exists() for path in files):
+            ledger.status[job.name] = "done"
+        else:
+            reporter.warn(f"scene {job.name} is marked done but files are missing: re-render")
+    ledger.done_before = ledger.done()
+
+
+Stop = tuple[str, str]
+"""Why a batch stopped early: (outcome, reason), outcome ``write_error`` or ``interrupted``."""
+
+
+def render_pending(
+    ledger: SceneLedger, options: BatchOptions, client: Any, reporter: Reporter
+) -> Stop | None:
+    """Render the pending scenes, recording each as it finishes; stop on storage errors."""
+    jobs = ledger.jobs
+    pending = [jobs[name] for name, status in ledger.status.items() if status != "done"]
+    reporter.start(
+        planned=len(jobs),
+        done_before=ledger.done_before,
+        to_render=len(pending),
+        executor=options.executor,
+        workers=options.workers,
+        root=str(ledger.layout.root),
+    )
+    if not pending:
+        return None
+    stop: Stop | None = None
+    runner: Any = None
+    restore_sigterm = _sigterm_raises_interrupt()
+    try:
+        runner = start_executor(
+            pending, ledger.layout.root, options.workers, client, reporter.pass_note
+        )
+        for name, outcome in runner.results():
+            stopping = stop is None
+            stop = _record(ledger, jobs[name], outcome, stop, reporter)
+            if stopping and stop is not None:
+                runner.cancel()  # let running scenes finish, start no more
+    except KeyboardInterrupt:
+        stop = ("interrupted", "interrupted")
+        if runner is not None:
+            runner.abort()
+    finally:
+        if runner is not None:
+            with contextlib.suppress(Exception):
+                runner.close()
+        restore_sigterm()
+    return stop
+
+
+def _record(
+    ledger: SceneLedger,
+    job: SceneJob,
+    outcome: SceneDone | BaseException,
+    stop: Stop | None,
+    reporter: Reporter,
+) -> Stop | None:
+    """Record one finished scene and rewrite the manifest; returns the batch's stop reason."""
+    root = ledger.layout.root
+    if isinstance(outcome, BaseException):
+        if _is_storage_error(outcome, root):
+            return stop or ("write_error", f"cannot write scene {job.name}: {outcome}")
+        ledger.errors[job.name] = describe_error(outcome)
+        ledger.status[job.name] = "failed"
+        reporter.scene_failed(job, ledger.errors[job.name])
+    else:
+        ledger.status[job.name] = "done"
+        ledger.errors.pop(job.name, None)
+        ledger.rendered.append(job.name)
+        reporter.scene_done(job, outcome.timings.get("total", 0.0), outcome.timings)
+    try:
+        ledger.write_manifest()
+    except OSError as err:
+        return stop or ("write_error", f"cannot write {ledger.layout.manifest}: {err}")
+    return stop
+
+
+def finish(
+    ledger: SceneLedger, stop: Stop | None, seconds: float, reporter: Reporter
+) -> BatchReport:
+    """Write the last manifest (and the COCO files when every scene is done); the report."""
+    try:
+        ledger.write_manifest()
+        if all(s == "done" for s in ledger.status.values()):
+            write_coco(ledger.layout.root)
+    except OSError as err:
+        if stop is None or stop[0] != "write_error":
+            stop = ("write_error", f"cannot write the manifest or COCO files: {err}")
+    jobs, total = ledger.jobs, len(ledger.status)
+    report = BatchReport(
+        "complete",
+        total,
+        ledger.done(),
+        ledger.done_before,
+        len(ledger.rendered),
+        sum(jobs[name].images() for name in ledger.rendered),
+        seconds,
+        dict(ledger.errors),
+    )
+    if stop is not None and stop[0] == "write_error":
+        report.outcome = "write_error"
+        report.message = (
+            f"{stop[1]}; stopped with {report.done} of {total} scenes done (kept). "
+            "Fix the storage (free space, permissions) and rerun the same command to resume."
+        )
+    elif stop is not None:
+        report.outcome = "interrupted"
+        report.message = (
+            f"interrupted with {report.done} of {total} scenes done; rerun the same command "
+            f"to render the other {total - report.done}"
+        )
+    elif ledger.errors:
+        report.outcome = "failed"
+        report.message = (
+            f"{len(ledger.errors)} of {total} scenes failed "
+            f"({', '.join(sorted(ledger.errors)[:5])}); rerun the same command to retry them"
+        )
+    reporter.end(report)
+    return report
+
+
+def _is_storage_error(err: BaseException, root: Path) -> bool:
+    if not isinstance(err, OSError):
+        return False
+    if err.errno in FATAL_ERRNOS:
+        return True
+    filename = getattr(err, "filename", None)
+    return bool(filename) and Path(str(filename)).resolve().is_relative_to(root)
+
+
+def _sigterm_raises_interrupt() -> Callable[[], None]:
+    """Make SIGTERM (a batch system at its time limit) stop the batch like Ctrl-C.
+
+    Returns the function that restores the previous handler. Signal handlers can only be set
+    from the main thread; elsewhere this does nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+
+    def handler(_signum: int, _frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    return lambda: signal.signal(signal.SIGTERM, previous)

@@ -1,0 +1,234 @@
+"""``seahaze render``: scene files (or a batch of their variants) into a dataset folder."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..spec import RENDER_MODES
+from .common import DEFAULT_SCENE, UsageError, load_scenes, parse_res, parse_vis
+
+DEFAULT_OUT = Path("out/dataset")
+
+
+def _scene_paths(items: list[str]) -> list[str]:
+    """Scene files from the command line: files as given, folders expanded to their *.yaml."""
+    paths: list[str] = []
+    for item in items:
+        folder = Path(item)
+        if folder.is_dir():
+            found = sorted(
+                (p for p in folder.iterdir() if p.suffix in (".yaml", ".yml") and p.is_file()),
+                key=lambda p: p.name,
+            )
+            if not found:
+                raise UsageError(f"{item}: the folder holds no scene files (*.yaml, *.yml)")
+            paths += [str(p) for p in found]
+        else:
+            paths.append(item)
+    return paths
+
+
+def _check_batch_args(args: argparse.Namespace) -> None:
+    """Reject batch flags that do not fit together, before any scene file is read."""
+    if args.count is not None and args.count < 1:
+        raise UsageError(f"--scenes {args.count}: must be >= 1")
+    if args.workers is not None and args.workers < 1:
+        raise UsageError(f"--workers {args.workers}: must be >= 1")
+    if args.executor == "dask":
+        if not args.scheduler:
+            raise UsageError(
+                "--executor dask needs --scheduler ADDRESS, e.g. tcp://10.0.0.5:8786 "
+                "(see docs/batches.md)"
+            )
+        if args.workers is not None:
+            raise UsageError(
+                "--workers is for --executor local; a Dask cluster's size is its workers"
+            )
+    elif args.scheduler:
+        raise UsageError("--scheduler needs --executor dask")
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    """Render scenes (or a batch of scene variants) into a dataset folder."""
+    from ..batch import (
+        BatchOptions,
+        BatchRefusedError,
+        DatasetError,
+        Reporter,
+        plan_scenes,
+        run_batch,
+    )
+    from ..render.variant import VariantError, select_variant
+    from ..spec import OverrideError, with_overrides
+
+    _check_batch_args(args)
+    paths = _scene_paths(args.scenes or [str(DEFAULT_SCENE)])
+    levels = parse_vis(args.vis)
+    resolution = parse_res(args.res) if args.res else None
+    if args.spp is not None and args.spp < 1:
+        raise UsageError(f"--spp {args.spp}: must be >= 1")
+    scenes = []
+    for spec, name in load_scenes(paths):
+        try:
+            spec = with_overrides(
+                spec,
+                spp=args.spp,
+                resolution=resolution,
+                seed=args.seed,
+                mode=args.mode,
+                variant=args.variant,
+                levels=levels,
+            )
+        except OverrideError as err:
+            raise UsageError(f"{name}: {err}") from None
+        scenes.append((spec, name))
+    try:
+        plan = plan_scenes(scenes, args.count)
+    except DatasetError as err:
+        raise UsageError(str(err)) from None
+    if args.executor == "local":
+        # A variant that cannot run here is bad input, not a failure of every scene. (Dask
+        # workers choose theirs: the coordinator may be a login node without Mitsuba's LLVM.)
+        try:
+            for variant in sorted({s.render.variant for s, _ in scenes}):
+                select_variant(variant)
+        except VariantError as err:
+            raise UsageError(str(err)) from None
+    out = Path(args.out)
+    try:
+        reporter = Reporter(quiet=args.quiet, log=Path(args.log) if args.log else None)
+    except OSError as err:
+        raise UsageError(f"--log {args.log}: cannot open it ({err.strerror})") from None
+    options = BatchOptions(
+        workers=args.workers or 1,
+        executor=args.executor,
+        scheduler=args.scheduler,
+        force=args.force,
+    )
+    try:
+        report = run_batch(plan, out, options, reporter)
+    except BatchRefusedError as err:
+        # main() prints a one-line message after "seahaze: error:", a multi-line one as is.
+        text = str(err)
+        raise UsageError(text if "\n" not in text else f"seahaze: error: {text}") from None
+    except OSError as err:
+        print(f"seahaze: error: cannot write to {out}: {err}", file=sys.stderr)
+        return 3
+    finally:
+        reporter.close()
+    if report.outcome == "complete" and report.rendered == 0:
+        print(
+            f"nothing to render: all {report.planned} scene(s) in {out.resolve()} are done "
+            "(delete the folder to render them again)"
+        )
+        return 0
+    before = f", {report.done_before} already done" if report.done_before else ""
+    failed = f", {len(report.failed)} failed" if report.failed else ""
+    rate = report.images / report.seconds if report.seconds > 0 else 0.0
+    print(
+        f"wrote {report.rendered} scene(s), {report.images} images to {out.resolve()} in "
+        f"{report.seconds:.1f} s ({rate:.2f} images/s){before}{failed}; "
+        f"{report.done} of {report.planned} scenes done"
+    )
+    if report.message:
+        print(f"seahaze: error: {report.message}", file=sys.stderr)
+    return report.exit_code
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """The ``render`` subcommand and its flags."""
+    parser = sub.add_parser(
+        "render",
+        help="render scenes into a dataset folder",
+        description="Render scene YAML files: clean image, hazy levels, distance, labels.",
+    )
+    parser.add_argument(
+        "scenes",
+        nargs="*",
+        metavar="SCENE.yaml",
+        help=f"scene files or folders of them (*.yaml) (default: {DEFAULT_SCENE})",
+    )
+    parser.add_argument(
+        "--vis",
+        metavar="SEL",
+        help="levels: A..B (graded levels in [A,B]), A..B:N (N log-spaced), or 300,1000,2500; "
+        "default the scene's haze.levels",
+    )
+    parser.add_argument(
+        "--out",
+        default=str(DEFAULT_OUT),
+        metavar="DIR",
+        help=f"dataset folder (default: {DEFAULT_OUT})",
+    )
+    parser.add_argument(
+        "--spp", type=int, metavar="N", help="samples per pixel (default: the scene's render.spp)"
+    )
+    parser.add_argument(
+        "--res",
+        metavar="WxH",
+        help="image size in pixels, e.g. 160x90 (default: the scene's camera.resolution)",
+    )
+    parser.add_argument(
+        "--seed",
+        type=int,
+        metavar="S",
+        help="master seed; with --scenes, the seed every scene's seed derives from "
+        "(default: the scene's render.seed)",
+    )
+    parser.add_argument(
+        "--mode",
+        choices=list(RENDER_MODES),
+        help="hazy-level renderer (default: the scene's render.mode)",
+    )
+    parser.add_argument(
+        "--variant",
+        metavar="NAME",
+        help="Mitsuba variant: auto, llvm_ad_rgb, cuda_ad_rgb, scalar_rgb, ...",
+    )
+    parser.add_argument(
+        "--scenes",
+        dest="count",
+        type=int,
+        metavar="N",
+        help="render N scenes per scene file, named <scene>_00000 ...; scene i draws camera "
+        "heading, sun, sea and vessel layout from the file's 'variation:' ranges with a seed "
+        "derived from (--seed, scene name, i) (default: one scene per file, as written)",
+    )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        metavar="K",
+        help="render K scenes at once in local worker processes (default 1: in this process)",
+    )
+    parser.add_argument(
+        "--executor",
+        choices=["local", "dask"],
+        default="local",
+        help="where scenes render: 'local' (this machine, --workers) or 'dask' (tasks on the "
+        "Dask cluster at --scheduler; the output folder must be shared with its workers)",
+    )
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (--executor dask)",
+    )
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="accept a config that differs from the one the --out folder was made with: "
+        "re-render what changed, delete scenes and levels no longer configured",
+    )
+    parser.add_argument(
+        "--log",
+        metavar="FILE.jsonl",
+        help="append one JSON line per event (start, scene done with timings, scene failed, "
+        "end) to FILE, for batch systems",
+    )
+    parser.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress bar or messages, only warnings and the final summary",
+    )
+    parser.set_defaults(func=cmd_render)

@@ -1,0 +1,20 @@
+"""The dataset folder: its layout, its manifest and Ultralytics files, and the scene writer.
+
+* :mod:`~seahaze.dataset.layout` — where every file of a dataset folder lives.
+* :mod:`~seahaze.dataset.manifest` — ``dataset.json`` and ``data.yaml``.
+* :mod:`~seahaze.dataset.writer` — a rendered scene's files (imported on its own: it needs the
+  render layer's types).
+
+The layout is a contract users and tools rely on: docs/dataset-format.md.
+"""
+
+from .layout import Layout
+from .manifest import FORMAT_VERSION, data_yaml_text, level_entries, manifest
+
+__all__ = [
+    "FORMAT_VERSION",
+    "Layout",
+    "data_yaml_text",
+    "level_entries",
+    "manifest",
+]

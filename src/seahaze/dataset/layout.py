@@ -1,0 +1,58 @@
+"""Paths of the files of one dataset folder (docs/dataset-format.md)::
+
+OUT/data.yaml  OUT/dataset.json
+OUT/images/clean/<scene>.png       OUT/images/v0300/<scene>.png ...
+OUT/labels/<level>/<scene>.txt     OUT/depth/<scene>.exr
+OUT/exr/<level>/<scene>.exr        OUT/meta/<scene>.json
+OUT/coco/<level>.json
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..visibility import CLEAN_LEVEL
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Paths of the files of one dataset folder."""
+
+    root: Path
+
+    def image(self, level: str, scene: str) -> Path:
+        return self.root / "images" / level / f"{scene}.png"
+
+    def label(self, level: str, scene: str) -> Path:
+        return self.root / "labels" / level / f"{scene}.txt"
+
+    def exr(self, level: str, scene: str) -> Path:
+        return self.root / "exr" / level / f"{scene}.exr"
+
+    def depth(self, scene: str) -> Path:
+        return self.root / "depth" / f"{scene}.exr"
+
+    def coco(self, level: str) -> Path:
+        return self.root / "coco" / f"{level}.json"
+
+    def meta(self, scene: str) -> Path:
+        return self.root / "meta" / f"{scene}.json"
+
+    @property
+    def data_yaml(self) -> Path:
+        return self.root / "data.yaml"
+
+    @property
+    def manifest(self) -> Path:
+        return self.root / "dataset.json"
+
+    def scene_files(self, scene: str, hazy_levels: list[str], exr: bool) -> list[Path]:
+        """Every file one scene writes: meta, depth, and per level (clean first) its image,
+        label and (with ``exr``) linear EXR."""
+        files = [self.meta(scene), self.depth(scene)]
+        for level in [CLEAN_LEVEL, *hazy_levels]:
+            files += [self.image(level, scene), self.label(level, scene)]
+            if exr:
+                files.append(self.exr(level, scene))
+        return files

@@ -1,0 +1,250 @@
+"""One scene, rendered: a validated spec in; images, passes, labels and metadata out, in memory.
+
+This is the render layer's entry point for the dataset writer, ``seahaze verify``'s sibling
+scripts and the benchmarks. It writes no file: :func:`seahaze.dataset.writer.write_scene` does.
+
+One Mitsuba scene is loaded per scene; the geometry pass, the clean pass and every hazy level
+reuse it (only the medium or the integrator's haze parameters change between levels).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .. import annotate, imaging, labels
+from ..camera import Camera
+from ..spec import SceneSpec
+from ..visibility import CLEAN_LEVEL, channel_extinction, extinction_coefficient, level_name
+from ..world import SceneGeometry, build_geometry
+from . import passes
+from .levels import LevelRenderer
+from .passes import Airlight, GeometryPass
+from .scene import LoadedScene, build_scene
+from .variant import select_variant
+
+Progress = Callable[[str], None]
+
+
+def _quiet(_: str) -> None:
+    pass
+
+
+@dataclass
+class RenderedLevel:
+    """One hazy level of a scene."""
+
+    name: str
+    """Folder name, e.g. ``v0300``."""
+    visibility_m: float
+    sigma_rgb: np.ndarray
+    """(3,) extinction per channel (1/m)."""
+    radiance: np.ndarray
+    """(H, W, 3) float32 linear RGB radiance."""
+    airlight: Airlight | None = None
+    """The horizon airlight (``asm`` only)."""
+
+
+@dataclass
+class SceneRender:
+    """Everything one scene's files hold, in memory."""
+
+    name: str
+    variant: str
+    exposure: float
+    """Linear factor from radiance to display values, the same for the clean image and every
+    level (:mod:`seahaze.imaging`)."""
+    clean: np.ndarray
+    """(H, W, 3) float32 linear RGB radiance without haze."""
+    levels: list[RenderedLevel]
+    geometry: GeometryPass
+    """Per-pixel distance (the depth file), instances and ray directions."""
+    boxes: list[labels.Box]
+    label_text: str
+    """The YOLO label file of every level (the same boxes at every level)."""
+    meta: dict[str, Any]
+    """The scene's ``meta/<scene>.json``."""
+    write_exr: bool = True
+    timings: dict[str, float] = field(default_factory=dict)
+    """Wall-clock seconds per pass (progress and logs only, never written to the dataset)."""
+
+
+@contextmanager
+def _timed(timings: dict[str, float], key: str) -> Iterator[None]:
+    start = time.perf_counter()
+    try:
+        yield
+    finally:
+        timings[key] = time.perf_counter() - start
+
+
+@dataclass
+class SceneSession:
+    """One scene loaded for rendering: its camera, geometry, Mitsuba scene and geometry pass."""
+
+    spec: SceneSpec
+    variant: str
+    camera: Camera
+    geometry: SceneGeometry
+    loaded: LoadedScene
+    pixels: GeometryPass
+    """Per-pixel distance, instances and ray directions (the depth file and the labels)."""
+
+    def level_renderer(self, clean: np.ndarray) -> LevelRenderer:
+        """The renderer of this scene's hazy levels in the spec's mode (``clean``: for asm)."""
+        spec = self.spec
+        return LevelRenderer(
+            spec.render.mode, self.loaded, self.pixels, clean, spec.haze, spec.render
+        )
+
+    def render_clean(self, spp: int | None = None) -> np.ndarray:
+        """The haze-free radiance (H, W, 3) at ``spp`` (default the spec's)."""
+        haze, render = self.spec.haze, self.spec.render
+        return passes.render_clean(self.loaded, spp or render.spp, render.seed, haze.albedo, haze.g)
+
+
+def open_session(
+    spec: SceneSpec,
+    geometry: SceneGeometry | None = None,
+    *,
+    black_vessels: bool = False,
+    reach_m: float = 0.0,
+    timings: dict[str, float] | None = None,
+) -> SceneSession:
+    """Select the variant, build the geometry (unless given), load the Mitsuba scene for the
+    spec's levels and mode, and trace the geometry pass.
+
+    ``black_vessels`` and ``reach_m`` are for calibration scenes (:func:`build_scene`).
+    """
+    timings = {} if timings is None else timings
+    variant = select_variant(spec.render.variant)
+    camera = Camera.from_spec(spec.camera)
+    with _timed(timings, "geometry_build"):
+        geometry = build_geometry(spec, camera) if geometry is None else geometry
+    with _timed(timings, "scene_load"):
+        # The physical mode computes the haze itself: no Mitsuba medium in its scene.
+        loaded = build_scene(
+            spec,
+            camera,
+            geometry,
+            list(spec.haze.levels),
+            black_vessels=black_vessels,
+            haze_box=spec.render.mode != "physical",
+            reach_m=reach_m,
+        )
+    with _timed(timings, "aov"):
+        pixels = passes.render_geometry(loaded)
+    return SceneSession(spec, variant, camera, geometry, loaded, pixels)
+
+
+def render_scene(spec: SceneSpec, name: str, progress: Progress = _quiet) -> SceneRender:
+    """Render one scene: geometry, clean and every level of ``spec.haze.levels``."""
+    timings: dict[str, float] = {}
+    session = open_session(spec, timings=timings)
+    n_vessels = len(session.geometry.vessels)
+    progress(f"{name}: scene loaded ({session.variant}, {n_vessels} vessels)")
+    haze, mode = spec.haze, spec.render.mode
+    with _timed(timings, "clean"):
+        clean = session.render_clean()
+    progress(f"{name}: clean pass {timings['clean']:.1f} s")
+
+    renderer = session.level_renderer(clean)
+    rendered = []
+    for i, v in enumerate(spec.haze.levels):
+        sigma = channel_extinction(v, haze.threshold, haze.extinction_spectrum)
+        key = level_name(v)
+        with _timed(timings, f"level_{key}"):
+            level = renderer.render(sigma, i)
+        rendered.append(RenderedLevel(key, v, sigma, level.radiance, level.airlight))
+        progress(f"{name}: {key} ({mode}) {timings[f'level_{key}']:.1f} s")
+    return _assemble(session, name, clean, rendered, timings)
+
+
+def _assemble(
+    session: SceneSession,
+    name: str,
+    clean: np.ndarray,
+    levels: list[RenderedLevel],
+    timings: dict[str, float],
+) -> SceneRender:
+    """Exposure, labels and metadata of the rendered passes."""
+    spec, camera, geometry, geo = session.spec, session.camera, session.geometry, session.pixels
+    elevation = geo.elevation_deg()
+    exposure = (
+        imaging.auto_exposure(clean, geo.distance_m, elevation)
+        if spec.render.exposure == "auto"
+        else float(spec.render.exposure)
+    )
+    boxes = labels.boxes_from_instances(
+        geo.instance,
+        [v.class_id for v in geometry.vessels],
+        geo.footprint_px,
+        spec.labels.min_box_px,
+        spec.labels.min_visible_fraction,
+    )
+    n_vessels = len(geometry.vessels)
+    clean_horizon = annotate.horizon_luminance(clean, geo.distance_m, elevation)
+    contrasts: annotate.LevelContrasts = {
+        CLEAN_LEVEL: (
+            np.inf,
+            annotate.apparent_contrasts(clean, geo.instance, n_vessels, clean_horizon),
+        )
+    }
+    level_meta = []
+    for level in levels:
+        horizon = annotate.horizon_luminance(level.radiance, geo.distance_m, elevation)
+        if horizon is None and level.airlight is not None:
+            horizon = float(imaging.luminance(level.airlight.rgb))
+        contrasts[level.name] = (
+            level.visibility_m,
+            annotate.apparent_contrasts(level.radiance, geo.instance, n_vessels, horizon),
+        )
+        entry: dict[str, Any] = {
+            "name": level.name,
+            "visibility_m": level.visibility_m,
+            "sigma_per_m": extinction_coefficient(level.visibility_m, spec.haze.threshold),
+            "sigma_rgb_per_m": level.sigma_rgb.tolist(),
+            "horizon_luminance": horizon,
+        }
+        if level.airlight is not None:
+            entry["airlight_rgb"] = level.airlight.rgb.tolist()
+            entry["airlight_stderr_rgb"] = level.airlight.stderr.tolist()
+        level_meta.append(entry)
+    meta = {
+        "scene": name,
+        "variant": session.variant,
+        "mode": spec.render.mode,
+        "exposure": exposure,
+        "camera": {**spec.camera.model_dump(mode="json"), "position_m": camera.origin.tolist()},
+        "sun": spec.sun.model_dump(mode="json"),
+        "sky": spec.sky.model_dump(mode="json"),
+        "sea": {
+            **spec.sea.model_dump(mode="json"),
+            "roughness_used": geometry.sea_roughness,
+            "triangles": len(geometry.sea.faces),
+        },
+        "haze": {
+            **spec.haze.model_dump(mode="json", exclude={"levels"}),
+            "box_half_width_m": session.loaded.box_half_width_m,
+        },
+        "levels": level_meta,
+        "vessels": annotate.vessel_meta(geometry, boxes, geo.footprint_px, contrasts),
+    }
+    return SceneRender(
+        name,
+        session.variant,
+        exposure,
+        clean,
+        levels,
+        geo,
+        boxes,
+        labels.yolo_text(boxes, camera.width, camera.height),
+        meta,
+        spec.render.write_exr,
+        timings,
+    )

@@ -1,0 +1,112 @@
+"""Hazy levels of one loaded scene in each rendering mode: the one entry point for every caller.
+
+The scene render (:mod:`seahaze.render.engine`), ``seahaze verify`` and the benchmarks all render
+levels through :class:`LevelRenderer`, so a mode behaves the same everywhere.
+
+Modes
+    ``physical``   seahaze's haze integrator (:mod:`seahaze.render.physical`): analytic
+                   transmittance, the sun's single scattering with shadow rays, the rest of the
+                   scattered light from a per-level plane-parallel table. Its scene has no
+                   Mitsuba medium (``build_scene(..., haze_box=False)``).
+    ``reference``  Mitsuba ``volpath`` through the haze box (:mod:`seahaze.render.passes`).
+    ``asm``        The atmospheric scattering model from the clean image, the exact distance
+                   and a rendered horizon airlight (:mod:`seahaze.render.passes`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..haze import Extinction
+from ..seeds import RenderPass, render_seed
+from ..spec import RENDER_MODES, HazeSpec, RenderSpec
+from . import passes
+from .passes import Airlight, GeometryPass
+from .physical import PhysicalRenderer
+from .scene import LoadedScene
+
+
+@dataclass
+class LevelRender:
+    """One hazy level's linear radiance and what the mode measured on the way."""
+
+    radiance: np.ndarray
+    """(H, W, 3) float32 linear RGB radiance."""
+    airlight: Airlight | None = None
+    """The horizon airlight (``asm`` only)."""
+
+
+class LevelRenderer:
+    """Renders the hazy levels of one loaded scene in one mode.
+
+    ``clean`` and ``geometry`` are the scene's clean and geometry passes (the ``asm`` mode
+    composites them). What a mode builds once per scene — the ``physical`` mode's integrator,
+    its compiled kernel and the pre-sampled sea reflection — is built on the first level and
+    reused for the others.
+    """
+
+    def __init__(
+        self,
+        mode: str,
+        loaded: LoadedScene,
+        geometry: GeometryPass,
+        clean: np.ndarray,
+        haze: HazeSpec,
+        render: RenderSpec,
+    ):
+        if mode not in RENDER_MODES:
+            raise ValueError(f"unknown render mode {mode!r}; allowed: {', '.join(RENDER_MODES)}")
+        if mode == "physical" and (loaded.spec is None or loaded.has_haze_box):
+            raise ValueError(
+                "the physical mode needs a scene from build_scene(..., haze_box=False): it "
+                "computes the haze itself, and a Mitsuba medium would be crossed as a surface"
+            )
+        self.mode, self.loaded, self.geometry, self.clean = mode, loaded, geometry, clean
+        self.haze, self.settings = haze, render
+        self._physical: PhysicalRenderer | None = None
+
+    def render(
+        self,
+        sigma: Extinction,
+        level_index: int,
+        render: RenderSpec | None = None,
+        haze: HazeSpec | None = None,
+    ) -> LevelRender:
+        """The level of extinction ``sigma`` (1/m, grey or per channel R, G, B); ``level_index``
+        picks its random numbers; ``render`` and ``haze`` override the spp, seed, albedo and
+        phase function given at construction."""
+        render, haze = render or self.settings, haze or self.haze
+        loaded = self.loaded
+        if self.mode == "reference":
+            radiance = passes.render_reference_level(
+                loaded, sigma, haze.albedo, haze.g, render.spp, render.seed, level_index
+            )
+            return LevelRender(radiance)
+        if self.mode == "asm":
+            airlight = passes.render_airlight(
+                loaded, sigma, haze.albedo, haze.g, render.airlight_spp, render.seed, level_index
+            )
+            radiance = passes.asm_level(self.clean, self.geometry, sigma, airlight.rgb, haze.top_m)
+            return LevelRender(radiance, airlight)
+        if self._physical is None:
+            assert loaded.spec is not None  # checked in __init__
+            self._physical = PhysicalRenderer(loaded, loaded.spec)
+        seed = render_seed(render.seed, RenderPass.PHYSICAL_LEVEL, level_index)
+        radiance, _ = self._physical.render(sigma, haze.albedo, haze.g, render.spp, seed)
+        return LevelRender(radiance)
+
+
+def render_level(
+    mode: str,
+    loaded: LoadedScene,
+    geometry: GeometryPass,
+    clean: np.ndarray,
+    sigma: Extinction,
+    haze: HazeSpec,
+    render: RenderSpec,
+    level_index: int,
+) -> LevelRender:
+    """One hazy level by a :class:`LevelRenderer` made for it (one-off callers and tests)."""
+    return LevelRenderer(mode, loaded, geometry, clean, haze, render).render(sigma, level_index)

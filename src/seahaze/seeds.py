@@ -1,0 +1,85 @@
+"""Every random seed of seahaze, derived from one master seed through named streams.
+
+A scene has one master seed (``render.seed``; a batch derives each scene's from ``--seed``).
+Everything random — the wave phases, the vessel layout, the vessel models, the Monte Carlo
+noise of each render pass, the scenes of a batch and their variations — draws from its own
+stream of :class:`numpy.random.SeedSequence` ``[master, stream, ...]``, so adding a stream or
+a draw in one never shifts the numbers of another. The stream numbers below are part of the
+output contract: changing one changes the bytes of every dataset rendered with it.
+"""
+
+from __future__ import annotations
+
+import zlib
+from enum import IntEnum
+
+import numpy as np
+
+MAX_SEED = 2**31 - 1
+"""Largest seed Mitsuba and the scene schema accept (``render.seed``, ``mi.render(seed=)``)."""
+
+
+class Stream(IntEnum):
+    """Streams of the master seed; each value is fixed forever (see the module docstring)."""
+
+    # Geometry (seahaze.world)
+    SEA = 1
+    """Wave phases of the sea surface (unless ``sea.seed`` is given)."""
+    LAYOUT = 2
+    """Where the sampled vessels go (unless ``vessels.sample.seed`` is given)."""
+    VESSELS = 3
+    """Proportions, parts and paint of the procedural vessel models."""
+    # Batches (seahaze.batch)
+    BATCH = 11
+    """Scene seeds of a batch, from (master seed, template name, scene index)."""
+    VARIATION = 12
+    """Per scene, one generator per varied quantity of the ``variation:`` ranges."""
+
+
+class RenderPass(IntEnum):
+    """Render passes of one scene: each draws its Monte Carlo noise from its own seed."""
+
+    CLEAN = 0
+    REFERENCE_LEVEL = 1
+    AIRLIGHT = 2
+    PHYSICAL_LEVEL = 3
+    CONVERGED_REFERENCE = 99
+    """Batches of the converged benchmark references (scripts/make_references.py)."""
+    VERIFY = 0x7E51F
+    """Batches of the ``seahaze verify`` calibration renders."""
+
+
+def stream_seed(master: int, stream: int, explicit: int | None = None) -> int:
+    """The 32-bit seed of one stream of ``master``; ``explicit`` (a seed the user gave) wins."""
+    if explicit is not None:
+        return explicit
+    return int(np.random.SeedSequence([master, int(stream)]).generate_state(1)[0])
+
+
+def stream_rng(master: int, stream: int, explicit: int | None = None) -> np.random.Generator:
+    """A numpy generator for one stream of ``master`` (see :func:`stream_seed`)."""
+    return np.random.default_rng(stream_seed(master, stream, explicit))
+
+
+def render_seed(master: int, render_pass: int, *parts: int) -> int:
+    """The 31-bit Mitsuba seed of a render pass (and its level, batch, ... ``parts``)."""
+    entropy = [master, int(render_pass), *map(int, parts)]
+    state = np.random.SeedSequence(entropy).generate_state(1, np.uint32)
+    return int(state[0]) & MAX_SEED
+
+
+def scene_seed(master: int, template: str, index: int) -> int:
+    """Seed of scene ``index`` of batch template ``template``.
+
+    The template name enters through CRC-32 (stable across runs, unlike ``hash``), so two
+    templates of one batch draw independent scenes and adding a template leaves the others'
+    scenes unchanged.
+    """
+    name_key = zlib.crc32(template.encode("utf-8"))
+    state = np.random.SeedSequence([master, int(Stream.BATCH), name_key, index]).generate_state(1)
+    return int(state[0]) & MAX_SEED
+
+
+def variation_rng(scene: int, quantity: int) -> np.random.Generator:
+    """The generator of varied quantity number ``quantity`` of the scene with seed ``scene``."""
+    return np.random.default_rng(np.random.SeedSequence([scene, int(Stream.VARIATION), quantity]))

@@ -1,0 +1,37 @@
+"""The drjit haze formulas the physical integrator traces agree with the numpy originals."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from seahaze import haze
+from seahaze.render import jit_haze
+
+
+@pytest.fixture(scope="module")
+def dr_float(mitsuba_variant):
+    import mitsuba as mi
+
+    return mi.Float
+
+
+def test_slab_interval_matches_numpy(dr_float) -> None:
+    rng = np.random.default_rng(3)
+    oz = rng.uniform(-100.0, 500.0, 4000)
+    dz = rng.uniform(-1.0, 1.0, 4000)
+    # Horizontal rays inside and outside the slab, and rays straight up and down.
+    oz[:4], dz[:4] = [10.0, 400.0, 10.0, 10.0], [0.0, 0.0, 1.0, -1.0]
+    enter, leave = jit_haze.slab_interval(dr_float(oz), dr_float(dz), -60.0, 300.0)
+    expected_enter, expected_leave = haze.slab_interval(oz, dz, -60.0, 300.0)
+    np.testing.assert_allclose(np.array(enter), expected_enter, rtol=1e-5, atol=1e-3)
+    np.testing.assert_allclose(np.array(leave), expected_leave, rtol=1e-5, atol=1e-3)
+
+
+@pytest.mark.parametrize("g", [0.0, 0.75, -0.3])
+def test_hg_phase_matches_numpy(dr_float, g: float) -> None:
+    cos = np.linspace(-1.0, 1.0, 2001)
+    got = np.array(jit_haze.hg_phase(dr_float(cos), g))
+    np.testing.assert_allclose(got, haze.hg_phase(cos, g), rtol=2e-5)
+    # And the numpy original is a normalised phase function: 2π ∫ p dμ = 1.
+    assert abs(2 * np.pi * np.trapezoid(haze.hg_phase(cos, g), cos) - 1.0) < 1e-3
