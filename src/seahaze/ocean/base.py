@@ -14,7 +14,6 @@ from typing import Literal, Protocol, runtime_checkable
 import numpy as np
 
 from .spectra import (
-    JONSWAP_GAMMA,
     SPREADING_S_MAX,
     SeaSpectrum,
     SpectrumName,
@@ -50,7 +49,8 @@ class OceanParams:
         choppiness: horizontal displacement scale lambda (dimensionless; Tessendorf 2001,
             eq. 29; for Gerstner waves the steepness ``Q`` of every component). Reduced, with a
             :class:`ChoppinessClampedWarning`, if the surface would fold.
-        gamma: JONSWAP peak enhancement.
+        gamma: JONSWAP peak enhancement; ``None`` (default): from the sea state
+            (:func:`seahaze.ocean.spectra.jonswap_gamma`, 1 for a fully developed sea).
         seed: seed of the ``numpy.random.Generator`` that draws amplitudes and phases.
         time_s: time (s); every component advances its phase by ``omega(k)·t``.
         spreading: ``"cos2s"`` (Mitsuyasu/Goda frequency-dependent exponent) or ``"cos2"``.
@@ -72,7 +72,7 @@ class OceanParams:
     fetch_km: float = 100.0
     direction_deg: float = 0.0
     choppiness: float = 0.8
-    gamma: float = JONSWAP_GAMMA
+    gamma: float | None = None
     seed: int = 0
     time_s: float = 0.0
     spreading: SpreadingName = "cos2s"
