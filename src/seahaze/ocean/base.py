@@ -59,8 +59,9 @@ class OceanParams:
         fft_resolution: FFT: grid points per side of every patch (power of two).
         fft_cascades: FFT: number of patches of incommensurate sizes (1–4); ``None`` = as few
             as give a finest grid spacing <= ``fft_min_wavelength_m/2``.
-        fft_min_wavelength_m: FFT: shortest wavelength to resolve when ``fft_cascades`` is
-            ``None`` (m); shorter waves belong to the BSDF roughness.
+        fft_min_wavelength_m: FFT: shortest wavelength the patches carry (m); with
+            ``fft_cascades`` ``None`` patches are added until the finest grid resolves it.
+            Shorter waves belong to the BSDF roughness.
         gerstner_frequencies: Gerstner: number of equal-energy frequency bins.
         gerstner_directions: Gerstner: components per frequency bin (equal-energy directions).
         gerstner_max_frequency_ratio: Gerstner: highest frequency sampled, in units of omega_p.
@@ -229,6 +230,18 @@ class FlatSurface:
     significant_wave_height_m: float = 0.0
     mean_square_slope: float = 0.0
     choppiness: float = 0.0
+
+    def mean_square_slope_filtered(self, spacing_m: float) -> float:
+        """No resolved slopes."""
+        return 0.0
+
+    def resolved_moments(self, spacing_m: float = 0.0) -> tuple[float, float]:
+        """No resolved waves."""
+        return 0.0, 0.0
+
+    def jacobian(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """1: a flat sea never breaks."""
+        return np.ones(np.broadcast(np.asarray(x), np.asarray(y)).shape)
 
     def displacement(
         self, x: np.ndarray, y: np.ndarray
