@@ -505,6 +505,14 @@ class FFTOcean:
         lam = self.choppiness
         return (1.0 + lam * dxx) * (1.0 + lam * dyy) - lam * lam * dxy * dxy
 
+    def patch_jacobian(self, index: int = 0, choppiness: float | None = None) -> np.ndarray:
+        """Horizontal Jacobian ``(N, N)`` of patch ``index`` alone on its grid nodes, with
+        ``choppiness`` (default: the surface's): the breaking indicator of the waves that patch
+        carries (:mod:`seahaze.ocean.whitecaps`)."""
+        lam = self.choppiness if choppiness is None else float(choppiness)
+        g = self._grids[index]
+        return (1.0 + lam * g[DXX]) * (1.0 + lam * g[DYY]) - (lam * g[DXY]) ** 2
+
     # ----------------------------------------------------------------------------- folding
 
     def max_choppiness(self) -> float:
