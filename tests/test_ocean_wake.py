@@ -4,6 +4,7 @@ evaluation of the Havelock integral, Froude scaling, foam wake, and no wake at r
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -236,3 +237,27 @@ def test_vessel_classes_have_cited_service_speeds() -> None:
     assert sample_speed_m_s("buoy", rng) == 0.0
     a = sample_speed_m_s("passenger_ferry", np.random.default_rng(9))
     assert a == sample_speed_m_s("passenger_ferry", np.random.default_rng(9))
+
+
+def test_sea_mesh_adds_wake_heights_and_foam() -> None:
+    """A wake on a calm (flat) sea: the mesh vertices behind the vessel carry its waves, the
+    stern carries foam, and a vessel at rest changes nothing."""
+    from seahaze.ocean import FlatSurface, build_sea_mesh_data
+
+    ferry = MovingVessel(300.0, 0.0, 90.0, FERRY.speed_m_s, 120.0, 20.0, 5.0)
+    mesh = build_sea_mesh_data(
+        FlatSurface(), camera_height_m=10.0, quality="low", wakes=WakeField([ferry])
+    )
+    x, y, z = mesh.vertices.T.astype(float)
+    behind = (np.abs(x - 300.0) < 0.3 * (-y)) & (y < -100.0) & (y > -600.0)
+    assert behind.sum() > 100
+    assert np.abs(z[behind]).max() > 0.1
+    assert np.abs(z[y > 400.0]).max() == 0.0  # nothing far ahead of the bow
+    assert mesh.foam is not None
+    stern = (np.abs(x - 300.0) < 5.0) & (y < -65.0) & (y > -200.0)
+    assert mesh.foam[stern].max() > 0.8
+    still = replace(ferry, speed_m_s=0.0)
+    calm = build_sea_mesh_data(
+        FlatSurface(), camera_height_m=10.0, quality="low", wakes=WakeField([still])
+    )
+    assert np.all(calm.vertices[:, 2] == 0.0) and np.all(calm.foam == 0.0)

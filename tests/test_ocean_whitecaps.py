@@ -122,3 +122,28 @@ def test_flat_sea_and_calm_wind_have_no_foam() -> None:
     calm = FoamField(_surface("fft", 6.0), 0.0)
     np.testing.assert_array_equal(calm(x, x), 0.0)
     assert math.isinf(calm.jacobian_threshold)
+
+
+def test_sea_mesh_carries_per_vertex_foam() -> None:
+    """``build_sea_mesh_data(..., foam=...)`` adds a foam fraction per vertex without moving a
+    vertex; far from the camera it is the mean coverage; ``build_sea_mesh`` is unchanged."""
+    from seahaze.ocean import build_sea_mesh, build_sea_mesh_data
+
+    surface = _surface("fft", 15.0)
+    foam = FoamField(surface, 15.0)
+    plain = build_sea_mesh_data(surface, camera_height_m=10.0, quality="low")
+    assert plain.foam is None
+    mesh = build_sea_mesh_data(surface, camera_height_m=10.0, quality="low", foam=foam)
+    np.testing.assert_array_equal(mesh.vertices, plain.vertices)
+    vertices, faces = build_sea_mesh(surface, camera_height_m=10.0, quality="low")
+    np.testing.assert_array_equal(faces, plain.faces)
+    np.testing.assert_array_equal(vertices, plain.vertices)
+    assert mesh.foam is not None and mesh.foam.shape == (len(mesh.vertices),)
+    assert mesh.foam.dtype == np.float32
+    assert mesh.foam.min() >= 0.0 and mesh.foam.max() <= 1.0
+    r = np.hypot(mesh.vertices[:, 0], mesh.vertices[:, 1])
+    far = r > mesh.fade_end_m
+    np.testing.assert_allclose(mesh.foam[far], whitecap_coverage(15.0), rtol=1e-6)
+    near = r < 0.5 * mesh.fade_start_m
+    assert mesh.foam[near].max() > 0.9  # resolved whitecaps near the camera
+    assert 0.3 * whitecap_coverage(15.0) < np.mean(mesh.foam[near] > 0.5) < 3.0 * 0.0393

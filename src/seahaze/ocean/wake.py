@@ -61,6 +61,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import fft as sfft
 
+from .base import lowpass_weight
 from .spectra import GRAVITY
 
 KNOT_M_S = 1852.0 / 3600.0
@@ -251,11 +252,21 @@ class ShipWaves:
         out[inside] = top * (1.0 - tv) + bottom * tv
         return out
 
-    def height(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Wave elevation (m) of this vessel's waves at world points (x, y) (m)."""
+    def height(
+        self, x: np.ndarray, y: np.ndarray, spacing_m: np.ndarray | float | None = None
+    ) -> np.ndarray:
+        """Wave elevation (m) of this vessel's waves at world points (x, y) (m).
+
+        With a mesh vertex spacing ``spacing_m`` (m) the field is weighted by
+        :func:`~seahaze.ocean.base.lowpass_weight` of the transverse wavelength, so a mesh too
+        coarse to carry the waves gets none instead of aliases.
+        """
         if not self.moving:
             return np.zeros(np.broadcast(np.asarray(x), np.asarray(y)).shape)
-        return self._sample(self._height, *np.broadcast_arrays(x, y))
+        out = self._sample(self._height, *np.broadcast_arrays(x, y))
+        if spacing_m is not None:
+            out = out * lowpass_weight(self.wavelength_m, spacing_m)
+        return out
 
     def slope(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Wave slope magnitude ``|grad zeta|`` at world points (x, y) (m)."""
@@ -310,11 +321,14 @@ class WakeField:
         self.vessels = list(vessels)
         self.waves = [_ship_waves(v, gravity) for v in self.vessels]
 
-    def height(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Sum of the vessels' wave elevations (m) at world points (x, y)."""
+    def height(
+        self, x: np.ndarray, y: np.ndarray, spacing_m: np.ndarray | float | None = None
+    ) -> np.ndarray:
+        """Sum of the vessels' wave elevations (m) at world points (x, y), band-limited for a
+        mesh vertex spacing ``spacing_m`` (m) if given (:meth:`ShipWaves.height`)."""
         total = np.zeros(np.broadcast(np.asarray(x), np.asarray(y)).shape)
         for waves in self.waves:
-            total += waves.height(x, y)
+            total += waves.height(x, y, spacing_m)
         return total
 
     def foam(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
