@@ -222,7 +222,9 @@ class ShipWaves:
         sy = np.fft.ifft2(1j * ky[:, None] * spectrum).real
         window = self._window(nx, ny, h)
         slope = np.hypot(sx, sy) * window
-        return height * window, slope
+        # float32 halves the memory of a large grid (2048² → 16 MB per field); the field's own
+        # accuracy (linear theory, grid interpolation) is far coarser than float32.
+        return (height * window).astype(np.float32), slope.astype(np.float32)
 
     def _window(self, nx: int, ny: int, h: float) -> np.ndarray:
         """1 inside the wake region, smooth to 0 ahead of the bow (beyond one transverse
@@ -339,7 +341,7 @@ class WakeField:
         return 1.0 - clear
 
 
-@functools.lru_cache(maxsize=32)
+@functools.lru_cache(maxsize=4)  # a few vessels' grids (up to 32 MB each)
 def _ship_waves(vessel: MovingVessel, gravity: float) -> ShipWaves:
     return ShipWaves(vessel, gravity)
 
