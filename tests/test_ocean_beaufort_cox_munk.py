@@ -47,13 +47,19 @@ def test_force_for_nominal_wind_round_trips(force: int) -> None:
 
 def test_presets_reach_the_table_height_where_the_sea_can() -> None:
     assert isinstance(make_surface(ocean_params_for_beaufort(0)), FlatSurface)
-    for force in (5, 7, 9):
+    for force in (4, 6, 7, 9):
         params = ocean_params_for_beaufort(force)
         hs = params.sea_spectrum().significant_wave_height
         assert hs == pytest.approx(beaufort_wave_height(force), rel=1e-3)
-    # Force 2's table height exceeds a fully developed wind sea: the preset is fully developed.
-    light = ocean_params_for_beaufort(2).sea_spectrum()
-    assert light.significant_wave_height < beaufort_wave_height(2)
+    # Forces 2 and 5: the table height exceeds a fully developed wind sea at the nominal wind
+    # (Pierson-Moskowitz Hs = 0.21 U19.5²/g: 0.13 m and 1.96 m), so the preset is fully
+    # developed. (Force 5 reached 2.0 m before the JONSWAP spectrum was capped at full
+    # development.)
+    for force in (2, 5):
+        u19_5 = 1.026 * beaufort_wind_speed(force)
+        hs = ocean_params_for_beaufort(force).sea_spectrum().significant_wave_height
+        assert hs < beaufort_wave_height(force)
+        assert hs == pytest.approx(0.21 * u19_5**2 / 9.81, rel=0.015)
 
 
 def test_rougher_sea_state_has_larger_hs_and_slope_variance() -> None:

@@ -6,7 +6,12 @@
 * :mod:`~seahaze.ocean.gerstner`, :mod:`~seahaze.ocean.fft` — the two wave generators behind
   :class:`OceanSurface`; :func:`make_surface` picks one from :class:`OceanParams`.
 * :mod:`~seahaze.ocean.mesh` — camera-centred polar mesh out to 100 km.
-* :mod:`~seahaze.ocean.cox_munk` — Cox–Munk slope statistics → microfacet roughness.
+* :mod:`~seahaze.ocean.cox_munk` — Cox–Munk slope statistics → microfacet roughness, and the
+  budget between resolved and sub-grid slopes.
+* :mod:`~seahaze.ocean.whitecaps` — whitecap coverage (Monahan & O'Muircheartaigh 1980), foam
+  reflectance (Koepke 1984), and a foam field on the breaking crests.
+* :mod:`~seahaze.ocean.wake` — Kelvin ship waves, bow waves and turbulent foam wakes of moving
+  vessels.
 
 See ``docs/ocean.md``.
 """
@@ -29,10 +34,12 @@ from .beaufort import (
     ocean_params_for_beaufort,
 )
 from .cox_munk import (
+    SlopeBudget,
     beckmann_alpha,
     cox_munk_alpha,
     cox_munk_anisotropic_alpha,
     mean_square_slope,
+    slope_budget,
     sub_grid_roughness,
 )
 from .fft import FFTCascade, FFTOcean, fft_choppiness_limit
@@ -40,19 +47,33 @@ from .gerstner import GerstnerOcean
 from .mesh import SeaMesh, build_sea_mesh, build_sea_mesh_data, horizon_gap_angle
 from .spectra import SeaSpectrum
 from .surface import make_surface
+from .wake import MovingVessel, ShipWaves, WakeField, transverse_wavelength, wake_foam, wake_height
+from .whitecaps import (
+    FOAM_REFLECTANCE,
+    FoamField,
+    foam_fraction,
+    whitecap_albedo,
+    whitecap_coverage,
+)
 
 __all__ = [
     "BEAUFORT_SCALE",
+    "FOAM_REFLECTANCE",
     "BeaufortForce",
     "ChoppinessClampedWarning",
     "FFTCascade",
     "FFTOcean",
     "FlatSurface",
+    "FoamField",
     "GerstnerOcean",
+    "MovingVessel",
     "OceanParams",
     "OceanSurface",
     "SeaMesh",
     "SeaSpectrum",
+    "ShipWaves",
+    "SlopeBudget",
+    "WakeField",
     "beaufort",
     "beaufort_force_for_wind",
     "beaufort_wave_height",
@@ -63,11 +84,18 @@ __all__ = [
     "cox_munk_alpha",
     "cox_munk_anisotropic_alpha",
     "fft_choppiness_limit",
+    "foam_fraction",
     "height_at",
     "horizon_gap_angle",
     "invert_horizontal_displacement",
     "make_surface",
     "mean_square_slope",
     "ocean_params_for_beaufort",
+    "slope_budget",
     "sub_grid_roughness",
+    "transverse_wavelength",
+    "wake_foam",
+    "wake_height",
+    "whitecap_albedo",
+    "whitecap_coverage",
 ]

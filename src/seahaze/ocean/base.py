@@ -14,7 +14,6 @@ from typing import Literal, Protocol, runtime_checkable
 import numpy as np
 
 from .spectra import (
-    JONSWAP_GAMMA,
     SPREADING_S_MAX,
     SeaSpectrum,
     SpectrumName,
@@ -50,7 +49,8 @@ class OceanParams:
         choppiness: horizontal displacement scale lambda (dimensionless; Tessendorf 2001,
             eq. 29; for Gerstner waves the steepness ``Q`` of every component). Reduced, with a
             :class:`ChoppinessClampedWarning`, if the surface would fold.
-        gamma: JONSWAP peak enhancement.
+        gamma: JONSWAP peak enhancement; ``None`` (default): from the sea state
+            (:func:`seahaze.ocean.spectra.jonswap_gamma`, 1 for a fully developed sea).
         seed: seed of the ``numpy.random.Generator`` that draws amplitudes and phases.
         time_s: time (s); every component advances its phase by ``omega(k)·t``.
         spreading: ``"cos2s"`` (Mitsuyasu/Goda frequency-dependent exponent) or ``"cos2"``.
@@ -59,8 +59,9 @@ class OceanParams:
         fft_resolution: FFT: grid points per side of every patch (power of two).
         fft_cascades: FFT: number of patches of incommensurate sizes (1–4); ``None`` = as few
             as give a finest grid spacing <= ``fft_min_wavelength_m/2``.
-        fft_min_wavelength_m: FFT: shortest wavelength to resolve when ``fft_cascades`` is
-            ``None`` (m); shorter waves belong to the BSDF roughness.
+        fft_min_wavelength_m: FFT: shortest wavelength the patches carry (m); with
+            ``fft_cascades`` ``None`` patches are added until the finest grid resolves it.
+            Shorter waves belong to the BSDF roughness.
         gerstner_frequencies: Gerstner: number of equal-energy frequency bins.
         gerstner_directions: Gerstner: components per frequency bin (equal-energy directions).
         gerstner_max_frequency_ratio: Gerstner: highest frequency sampled, in units of omega_p.
@@ -72,7 +73,7 @@ class OceanParams:
     fetch_km: float = 100.0
     direction_deg: float = 0.0
     choppiness: float = 0.8
-    gamma: float = JONSWAP_GAMMA
+    gamma: float | None = None
     seed: int = 0
     time_s: float = 0.0
     spreading: SpreadingName = "cos2s"
@@ -229,6 +230,18 @@ class FlatSurface:
     significant_wave_height_m: float = 0.0
     mean_square_slope: float = 0.0
     choppiness: float = 0.0
+
+    def mean_square_slope_filtered(self, spacing_m: float) -> float:
+        """No resolved slopes."""
+        return 0.0
+
+    def resolved_moments(self, spacing_m: float = 0.0) -> tuple[float, float]:
+        """No resolved waves."""
+        return 0.0, 0.0
+
+    def jacobian(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """1: a flat sea never breaks."""
+        return np.ones(np.broadcast(np.asarray(x), np.asarray(y)).shape)
 
     def displacement(
         self, x: np.ndarray, y: np.ndarray

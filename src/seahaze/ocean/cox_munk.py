@@ -40,6 +40,7 @@ Sub-grid roughness
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Protocol
 
 COX_MUNK_HEIGHT_M = 12.5
@@ -110,3 +111,50 @@ def sub_grid_roughness(
     resolved_mss = float(getattr(resolved, "mean_square_slope", resolved))
     remaining = mean_square_slope(wind_speed) - max(resolved_mss, 0.0)
     return beckmann_alpha(max(remaining, floor))
+
+
+class _ResolvesSlopes(Protocol):
+    def mean_square_slope_filtered(self, spacing_m: float) -> float: ...
+
+
+@dataclass(frozen=True)
+class SlopeBudget:
+    """How Cox–Munk's total mean square slope is shared between geometry and microfacets.
+
+    Attributes:
+        total: Cox–Munk ``sigma²(U)`` (dimensionless).
+        resolved: slope variance of the displaced geometry at the given vertex spacing.
+        sub_grid: slope variance left to the microfacets, ``max(total - resolved, floor)``.
+        alpha: isotropic Beckmann ``alpha = sqrt(sub_grid)`` for Mitsuba.
+    """
+
+    total: float
+    resolved: float
+    sub_grid: float
+    alpha: float
+
+    @property
+    def closes(self) -> bool:
+        """True when ``resolved + sub_grid == total`` (the floor did not act)."""
+        return math.isclose(self.resolved + self.sub_grid, self.total, rel_tol=1e-12)
+
+
+def slope_budget(
+    wind_speed: float,
+    surface: _ResolvesSlopes,
+    spacing_m: float = 0.0,
+    floor: float = MIN_SUBGRID_MEAN_SQUARE_SLOPE,
+) -> SlopeBudget:
+    """Split Cox–Munk's total mean square slope (``U`` in m/s, 10 m ≈ 12.5 m) into the part a
+    mesh of vertex spacing ``spacing_m`` (m) resolves (``surface.mean_square_slope_filtered``,
+    the band-limited displacement the mesh samples there) and the sub-grid rest for the BSDF.
+
+    Slope variances of independent scales add (Cox & Munk 1954 measured the total over all
+    scales), so ``resolved + sub_grid = total`` whenever ``resolved <= total - floor``. Near the
+    camera ``spacing_m`` is the local vertex spacing; where the mesh is faded flat, ``resolved``
+    is 0 and the microfacets carry everything (``alpha`` = :func:`cox_munk_alpha`).
+    """
+    total = mean_square_slope(wind_speed)
+    resolved = max(float(surface.mean_square_slope_filtered(spacing_m)), 0.0)
+    sub = max(total - resolved, floor)
+    return SlopeBudget(total, resolved, sub, beckmann_alpha(sub))

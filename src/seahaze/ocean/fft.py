@@ -34,9 +34,12 @@ Patch sizes (cascades)
     ``pi·N/L_(i-1)``. Each wavenumber belongs to exactly one patch, so the variances add up,
     and the sum of patches with incommensurate periods never repeats exactly. By default there
     are as many patches (1–4) as are needed for the finest grid spacing to reach
-    ``fft_min_wavelength_m/2`` (0.25 m): a fixed absolute cut-off, so that a rougher sea also
+    ``fft_min_wavelength_m/2`` (0.25 m), and no patch carries waves shorter than
+    ``fft_min_wavelength_m`` (0.5 m): a fixed absolute cut-off, so that a rougher sea also
     resolves a larger slope variance; the unresolved rest is microfacet roughness
-    (:mod:`seahaze.ocean.cox_munk`).
+    (:mod:`seahaze.ocean.cox_munk`). Without the cut a calm sea's single patch reached
+    centimetre waves and resolved more slope variance than Cox–Munk's total (1 m/s: 0.0101 vs
+    0.0081).
 
 Sampling
     Fields are sampled with periodic bilinear interpolation (``displacement``, ``normal``), or
@@ -283,6 +286,27 @@ def sample_pyramid(
     return out
 
 
+def _pyramid_mode_weight(cascade: FFTCascade, spacing_m: float) -> np.ndarray:
+    """Weight ``(N, N)`` of every mode of ``cascade`` in :func:`sample_pyramid` at the level
+    :meth:`FFTOcean.displacement_filtered` picks for vertex spacing ``spacing_m`` (m)."""
+    n = cascade.resolution
+    n_levels = round(math.log2(n))  # levels M = N, N/2, ..., 2
+    last = n_levels - 1
+    level = math.log2(max(spacing_m, 1e-12) / cascade.spacing_m) + 0.5
+    level = min(max(level, 0.0), float(last))
+    lower = min(math.floor(level), max(last - 1, 0))
+    frac = level - lower
+    index = np.abs(np.fft.fftfreq(n) * n)
+    reach = np.maximum(index[None, :], index[:, None])  # max(|n_x|, |n_y|)
+
+    def kept(lv: int) -> np.ndarray:
+        return (reach <= n // 2 ** (lv + 1) - 1).astype(float)
+
+    if lower + 1 <= last:
+        return (1.0 - frac) * kept(lower) + frac * kept(lower + 1)
+    return kept(lower)
+
+
 def default_patch_size(spectrum: SeaSpectrum) -> float:
     """Side of the largest FFT patch: ``PATCH_PEAK_WAVELENGTHS`` peak wavelengths (m)."""
     return PATCH_PEAK_WAVELENGTHS * spectrum.peak_wavelength
@@ -355,8 +379,14 @@ class FFTOcean:
             largest, params.fft_resolution, params.fft_min_wavelength_m
         )
         rng = np.random.default_rng(params.seed)
+        # Waves shorter than fft_min_wavelength_m are microfacet roughness, also when the grid
+        # could carry them (at low wind one patch of 8 peak wavelengths reaches centimetres,
+        # and the resolved slope variance would exceed Cox-Munk's total).
+        k_cut = 2.0 * math.pi / params.fft_min_wavelength_m
         cascades = [
-            FFTCascade.from_spectrum(spectrum, size, params.fft_resolution, rng, k_lo, k_hi)
+            FFTCascade.from_spectrum(
+                spectrum, size, params.fft_resolution, rng, min(k_lo, k_cut), min(k_hi, k_cut)
+            )
             for size, k_lo, k_hi in cascade_layout(largest, params.fft_resolution, n_cascades)
         ]
         return cls(cascades, params.choppiness, params.time_s, spectrum.peak_wavelength)
@@ -390,6 +420,31 @@ class FFTOcean:
     def mean_square_slope(self) -> float:
         """Spatial mean of ``|grad h|²`` over the patches (dimensionless)."""
         return float(sum(np.mean(g[SLOPE_X] ** 2 + g[SLOPE_Y] ** 2) for g in self._grids))
+
+    def resolved_moments(self, spacing_m: float = 0.0) -> tuple[float, float]:
+        """``(height variance (m²), mean square slope)`` of the band-limited surface that a mesh
+        of vertex spacing ``spacing_m`` (m) samples through :meth:`displacement_filtered`.
+
+        Each mode of each patch is weighted exactly as the trilinear pyramid lookup weights it
+        at that spacing (``(1 - f)`` from level ``l``, ``f`` from level ``l + 1``, 0 where a level
+        drops it), so the result is ``Σ w²·|h̃(k, t)|²`` and ``Σ w²·k²·|h̃(k, t)|²`` (Parseval).
+        ``spacing_m = 0`` gives :attr:`height_variance` and :attr:`mean_square_slope`: every
+        wave the generator holds. The microfacets must carry the rest of Cox–Munk's slope
+        variance (:func:`seahaze.ocean.cox_munk.slope_budget`).
+        """
+        variance = 0.0
+        mss = 0.0
+        for cascade in self.cascades:
+            power = np.abs(cascade.height_spectrum(self.time_s)) ** 2
+            weight = _pyramid_mode_weight(cascade, spacing_m)
+            variance += float(np.sum(weight**2 * power))
+            mss += float(np.sum(weight**2 * cascade.k**2 * power))
+        return variance, mss
+
+    def mean_square_slope_filtered(self, spacing_m: float) -> float:
+        """Mean square slope (dimensionless) of :meth:`displacement_filtered` at vertex spacing
+        ``spacing_m`` (m): the part of the slope variance a mesh that fine resolves."""
+        return self.resolved_moments(spacing_m)[1]
 
     # ----------------------------------------------------------------------------- sampling
 
@@ -449,6 +504,14 @@ class FFTOcean:
         dxx, dyy, dxy = self._sum_fields((DXX, DYY, DXY), x, y)
         lam = self.choppiness
         return (1.0 + lam * dxx) * (1.0 + lam * dyy) - lam * lam * dxy * dxy
+
+    def patch_jacobian(self, index: int = 0, choppiness: float | None = None) -> np.ndarray:
+        """Horizontal Jacobian ``(N, N)`` of patch ``index`` alone on its grid nodes, with
+        ``choppiness`` (default: the surface's): the breaking indicator of the waves that patch
+        carries (:mod:`seahaze.ocean.whitecaps`)."""
+        lam = self.choppiness if choppiness is None else float(choppiness)
+        g = self._grids[index]
+        return (1.0 + lam * g[DXX]) * (1.0 + lam * g[DYY]) - (lam * g[DXY]) ** 2
 
     # ----------------------------------------------------------------------------- folding
 

@@ -10,8 +10,10 @@ Model (Gerstner 1802; Fournier & Reeves 1986; Tessendorf 2001, §3.1)
     exactly the FFT model's choppy displacement restricted to a few modes.
 
 Sampling the spectrum
-    The band ``[omega_lo, r·omega_p]`` (``omega_lo`` where the spectrum's cumulative energy
-    reaches 0.1 %, ``r = gerstner_max_frequency_ratio``) is split into
+    The band ``[omega_lo, min(r·omega_p, omega_min_wl)]`` (``omega_lo`` where the spectrum's
+    cumulative energy reaches 0.1 %, ``r = gerstner_max_frequency_ratio``, ``omega_min_wl`` the
+    frequency of the shortest wave the generators carry, ``fft_min_wavelength_m``; it only acts
+    below about 2.4 m/s, where ``lambda_p/9`` is shorter than 0.5 m) is split into
     ``gerstner_frequencies`` bins of equal energy; in each bin one frequency is drawn by inverse
     CDF at a jittered quantile. For each frequency ``gerstner_directions`` directions are
     drawn the same way from ``D(theta; omega)``. Every component therefore carries the same
@@ -42,7 +44,7 @@ from .base import (
     lowpass_weight,
     unit_normals_from_tangents,
 )
-from .spectra import SeaSpectrum, deep_water_wavenumber
+from .spectra import SeaSpectrum, deep_water_omega, deep_water_wavenumber
 
 CHUNK = 32768
 """Points evaluated per matrix product (bounds memory at about 16 MB per temporary)."""
@@ -70,6 +72,7 @@ class GerstnerOcean:
         self.direction = np.asarray(direction, dtype=float)
         self.amplitude = np.asarray(amplitude, dtype=float)
         self.phase = np.asarray(phase, dtype=float)
+        self.gravity = float(gravity)
         self.k = deep_water_wavenumber(self.omega, gravity)
         self.time_s = float(time_s)
         self.peak_wavelength_m = float(peak_wavelength_m)
@@ -98,6 +101,7 @@ class GerstnerOcean:
             params.gerstner_directions,
             params.gerstner_max_frequency_ratio,
             rng,
+            max_omega=float(deep_water_omega(2.0 * math.pi / params.fft_min_wavelength_m)),
         )
         phase = rng.uniform(0.0, 2.0 * math.pi, omega.shape)
         return cls(
@@ -109,6 +113,20 @@ class GerstnerOcean:
             params.time_s,
             spectrum.peak_wavelength,
             spectrum.gravity,
+        )
+
+    def at_time(self, time_s: float) -> GerstnerOcean:
+        """The same components at another time (no new random draws; same choppiness)."""
+        return GerstnerOcean(
+            self.omega,
+            self.direction,
+            self.amplitude,
+            self.phase,
+            self.choppiness,
+            time_s,
+            self.peak_wavelength_m,
+            self.gravity,
+            warn=False,
         )
 
     # ----------------------------------------------------------------------------- statistics
@@ -123,6 +141,22 @@ class GerstnerOcean:
         """``Σ (k_i·A_i)²/2`` (dimensionless), the spatial mean of ``|grad z|²`` for
         ``lambda = 0``."""
         return float(np.sum((self.k * self.amplitude) ** 2) / 2.0)
+
+    def resolved_moments(self, spacing_m: float = 0.0) -> tuple[float, float]:
+        """``(height variance (m²), mean square slope)`` of :meth:`displacement_filtered` at
+        vertex spacing ``spacing_m`` (m): ``Σ w_i²·A_i²/2`` and ``Σ w_i²·(k_i·A_i)²/2`` with
+        ``w_i`` the :func:`~seahaze.ocean.base.lowpass_weight` of component ``i``; spacing 0
+        gives every component."""
+        weight = np.ones_like(self.k)
+        if spacing_m > 0.0:
+            weight = lowpass_weight(2.0 * math.pi / self.k, spacing_m)
+        variance = float(np.sum((weight * self.amplitude) ** 2) / 2.0)
+        mss = float(np.sum((weight * self.k * self.amplitude) ** 2) / 2.0)
+        return variance, mss
+
+    def mean_square_slope_filtered(self, spacing_m: float) -> float:
+        """Mean square slope resolved by a mesh of vertex spacing ``spacing_m`` (m)."""
+        return self.resolved_moments(spacing_m)[1]
 
     # ----------------------------------------------------------------------------- evaluation
 
@@ -183,6 +217,19 @@ class GerstnerOcean:
         dx, dy, dz = self._evaluate(x, y, self._displacement_weights(), use_sin, spacing_m)
         return dx, dy, dz
 
+    def elevation_series(self, x: np.ndarray, y: np.ndarray, times_s: np.ndarray) -> np.ndarray:
+        """Vertical displacement ``dz`` (m) at rest positions (x, y) (1-D, m) for every time of
+        ``times_s`` (s), shape ``(len(x), len(times_s))``: the record of a Lagrangian wave buoy
+        (``Σ A_i·cos(k_i·x0 - omega_i·t + phi0_i)``; ``self.time_s`` is ignored)."""
+        x = np.ravel(np.asarray(x, dtype=float))
+        y = np.ravel(np.asarray(y, dtype=float))
+        t = np.ravel(np.asarray(times_s, dtype=float))
+        spatial = np.outer(x, self._kx) + np.outer(y, self._ky) + self.phase  # (P, C)
+        out = np.empty((x.size, t.size))
+        for p in range(x.size):  # (T, C) per point keeps memory small
+            out[p] = np.cos(spatial[p][None, :] - np.outer(t, self.omega)) @ self.amplitude
+        return out
+
     def _derivatives(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """``d(x, y, z)/d(x0, y0)``: rows dx/dx0, dy/dx0, dz/dx0, dx/dy0, dy/dy0, dz/dy0."""
         c, s = np.cos(self.direction), np.sin(self.direction)
@@ -218,13 +265,15 @@ def sample_components(
     n_directions: int,
     max_frequency_ratio: float,
     rng: np.random.Generator,
+    max_omega: float = math.inf,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Stratified equal-energy components ``(omega (rad/s), direction (rad), amplitude (m))``.
 
     See the module docstring. Returns ``n_frequencies·n_directions`` components.
     """
     omega_p = spectrum.peak_omega
-    grid = np.linspace(0.05 * omega_p, max_frequency_ratio * omega_p, 4096)
+    top = min(max_frequency_ratio * omega_p, max(max_omega, 1.01 * omega_p))
+    grid = np.linspace(0.05 * omega_p, top, 4096)
     cdf = _cumulative(grid, spectrum.omega_spectrum(grid))
     lowest = float(np.interp(LOW_ENERGY_QUANTILE * cdf[-1], cdf, grid))
     band_energy = cdf[-1] - float(np.interp(lowest, grid, cdf))

@@ -28,6 +28,16 @@ Displacement fade
     (about ``2·Hs`` crest to trough) subtend less than one pixel. Beyond the fade the wave slopes
     belong to the BSDF (Cox–Munk roughness, :mod:`seahaze.ocean.cox_munk`).
 
+Foam and wakes (optional)
+    Given a :class:`~seahaze.ocean.whitecaps.FoamField`, every vertex gets a foam fraction
+    (``SeaMesh.foam``): the field at its rest position where the mesh resolves the foam patches
+    (weight ``w(r)·lowpass_weight(lambda_p/4, spacing)``, ``w`` the displacement fade), blended
+    toward the mean coverage ``W`` elsewhere, so the far sea carries the expected foam
+    fraction of the coverage law. Given a :class:`~seahaze.ocean.wake.WakeField`, the vessels'
+    wave heights are added at the vertices' world positions (band-limited by the vertex
+    spacing, independently of the sea's fade so a calm sea shows wakes too) and their foam is
+    combined with the whitecaps as independent coverages, ``1 - (1 - f_sea)(1 - f_wake)``.
+
 Horizon
     A plane's horizon is at infinity; a disc of radius ``R`` leaves the rays between the
     horizon and the depression ``atan(h/R)`` uncovered (camera height ``h``). With ``n_theta``
@@ -42,11 +52,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from .base import OceanSurface
+from .base import OceanSurface, lowpass_weight
+
+if TYPE_CHECKING:
+    from .wake import WakeField
+    from .whitecaps import FoamField
 
 Quality = Literal["low", "medium", "high"]
 
@@ -83,6 +97,8 @@ class SeaMesh:
         n_theta: vertices per ring.
         center_xy: world position of the centre (m).
         fade_start_m, fade_end_m: displacement fade radii (m); 0 for a flat sea.
+        foam: ``(N,)`` float32 foam fraction per vertex (0–1), or ``None`` when the mesh was
+            built without a foam field and without wakes.
     """
 
     vertices: np.ndarray
@@ -93,6 +109,7 @@ class SeaMesh:
     center_xy: tuple[float, float]
     fade_start_m: float
     fade_end_m: float
+    foam: np.ndarray | None = None
 
     @property
     def radius_m(self) -> float:
@@ -227,6 +244,8 @@ def build_sea_mesh_data(
     quality: Quality = "medium",
     radius_m: float | None = None,
     pixel_angle_rad: float | None = None,
+    foam: FoamField | None = None,
+    wakes: WakeField | None = None,
 ) -> SeaMesh:
     """Build the polar sea mesh around ``camera_xy`` (see the module docstring).
 
@@ -237,6 +256,10 @@ def build_sea_mesh_data(
         quality: ``"low"`` | ``"medium"`` | ``"high"`` (:data:`QUALITY_PRESETS`).
         radius_m: outer radius (m); default :data:`DEFAULT_RADIUS_M`.
         pixel_angle_rad: angular size of one pixel (rad), if known, to fade sub-pixel waves.
+        foam: whitecaps of ``surface`` (:class:`~seahaze.ocean.whitecaps.FoamField`), if any:
+            fills ``SeaMesh.foam``.
+        wakes: ship waves and foam wakes of moving vessels
+            (:class:`~seahaze.ocean.wake.WakeField`), if any.
     """
     if quality not in QUALITY_PRESETS:
         raise ValueError(f"quality must be one of {sorted(QUALITY_PRESETS)}, got {quality!r}")
@@ -261,14 +284,19 @@ def build_sea_mesh_data(
     y = np.concatenate([[0.0], np.outer(radii[1:], sin_t).ravel()]) + camera_xy[1]
     z = np.zeros_like(x)
 
+    spacing = np.concatenate([[radii[1]], np.repeat(ring_spacing(radii, n_theta), n_theta)])
+    foam_values = _vertex_foam(surface, foam, x, y, r, spacing, fade_start, fade_end)
     displaced = r < fade_end
     if np.any(displaced):
         weight = displacement_fade(r[displaced], fade_start, fade_end)
-        spacing = np.concatenate([[radii[1]], np.repeat(ring_spacing(radii, n_theta), n_theta)])
         dx, dy, dz = _displace(surface, x[displaced], y[displaced], spacing[displaced])
         x[displaced] += weight * dx
         y[displaced] += weight * dy
         z[displaced] = weight * dz
+    if wakes is not None:
+        z += wakes.height(x, y, spacing)
+        wake_foam = wakes.foam(x, y)
+        foam_values = 1.0 - (1.0 - foam_values) * (1.0 - wake_foam)
 
     vertices = np.stack([x, y, z], axis=1).astype(np.float32)
     faces = polar_grid_faces(n_theta, len(radii) - 1)
@@ -281,7 +309,40 @@ def build_sea_mesh_data(
         center_xy=(float(camera_xy[0]), float(camera_xy[1])),
         fade_start_m=fade_start,
         fade_end_m=fade_end,
+        foam=None if foam is None and wakes is None else foam_values.astype(np.float32),
     )
+
+
+FOAM_PATCH_PEAK_WAVELENGTHS = 0.25
+"""Size of a whitecap patch in peak wavelengths, for the foam band limit: the field is used
+where the vertex spacing resolves features of this size (4 spacings), the mean coverage where
+it cannot (2 spacings)."""
+
+
+def _vertex_foam(
+    surface: OceanSurface,
+    foam: FoamField | None,
+    x0: np.ndarray,
+    y0: np.ndarray,
+    r: np.ndarray,
+    spacing: np.ndarray,
+    fade_start: float,
+    fade_end: float,
+) -> np.ndarray:
+    """Foam fraction per vertex from rest positions (see the module docstring)."""
+    if foam is None:
+        return np.zeros_like(x0)
+    out = np.full_like(x0, foam.mean_fraction)
+    resolved = r < fade_end
+    if not np.any(resolved) or foam.mean_fraction == 0.0:
+        return out
+    patch = FOAM_PATCH_PEAK_WAVELENGTHS * surface.peak_wavelength_m
+    weight = displacement_fade(r[resolved], fade_start, fade_end) * lowpass_weight(
+        patch, spacing[resolved]
+    )
+    local = foam(x0[resolved], y0[resolved])
+    out[resolved] += weight * (local - foam.mean_fraction)
+    return out
 
 
 def build_sea_mesh(

@@ -30,6 +30,7 @@ References
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -60,7 +61,12 @@ JONSWAP_SIGMA_HIGH = 0.09
 """JONSWAP peak width for omega > omega_p (Hasselmann et al. 1973)."""
 
 JONSWAP_GAMMA = 3.3
-"""Mean JONSWAP peak-enhancement factor (Hasselmann et al. 1973)."""
+"""Mean JONSWAP peak-enhancement factor (Hasselmann et al. 1973); the default ``gamma`` is
+the sea-state dependent :func:`jonswap_gamma` instead."""
+
+JONSWAP_HS_GROWTH = 1.6e-3
+"""JONSWAP fetch-limited growth of the significant wave height, ``g·Hs/U10² = 1.6e-3·chi^½``
+(from the energy law ``g²·m0/U10⁴ = 1.6e-7·chi``, Hasselmann et al. 1973)."""
 
 SPREADING_S_MAX = 10.0
 """Default peak value of the cos-2s spreading exponent for wind waves (Goda 2010, §2.3)."""
@@ -170,7 +176,8 @@ def fully_developed_dimensionless_fetch(gravity: float = GRAVITY) -> float:
     value (full development): ``22·chi^(-1/3) = 0.877·1.026⁻¹`` → ``chi ≈ 1.70e4``.
 
     Longer fetches do not lower the peak further (the sea is fully developed), so seahaze caps
-    ``chi`` there; the JONSWAP ``alpha`` at the cap is 0.0089, close to the Phillips constant."""
+    ``chi`` there for the peak frequency. (The energy reaches full development at a slightly
+    longer fetch, ``chi ≈ 1.91e4``: :func:`jonswap_significant_wave_height`.)"""
     del gravity  # dimensionless
     pm_peak_u10 = (0.8 * PM_BETA) ** 0.25 / U19_5_OVER_U10  # omega_p·U10/g at full development
     return (22.0 / pm_peak_u10) ** 3
@@ -194,10 +201,119 @@ def jonswap_peak_frequency(u10: float, fetch_km: float, gravity: float = GRAVITY
     return 22.0 * (gravity / u10) * chi ** (-1.0 / 3.0)
 
 
-def jonswap_alpha(u10: float, fetch_km: float, gravity: float = GRAVITY) -> float:
-    """JONSWAP equilibrium-range constant ``alpha = 0.076·chi^(-0.22)`` (dimensionless;
-    Hasselmann et al. 1973), ``chi = g·F/U10²`` capped at full development."""
+def jonswap_alpha_fit(u10: float, fetch_km: float, gravity: float = GRAVITY) -> float:
+    """JONSWAP's own fit of the equilibrium-range constant, ``alpha = 0.076·chi^(-0.22)``
+    (dimensionless; Hasselmann et al. 1973), ``chi = g·F/U10²`` capped at full development.
+
+    Not used to build spectra: with ``gamma = 3.3`` and the peak law it gives 20–30 % more
+    ``Hs`` than JONSWAP's energy growth law, and 1.29× the fully developed Pierson–Moskowitz
+    ``Hs`` at the cap (see :func:`jonswap_alpha`). Kept as a reference value."""
     return 0.076 * _capped_fetch(u10, fetch_km, gravity) ** (-0.22)
+
+
+def jonswap_significant_wave_height(u10: float, fetch_km: float, gravity: float = GRAVITY) -> float:
+    """Fetch-limited significant wave height (m), capped at the fully developed sea.
+
+    JONSWAP energy growth law ``g²·m0/U10⁴ = 1.6e-7·chi`` (Hasselmann et al. 1973), i.e.
+    ``g·Hs/U10² = 1.6e-3·chi^(1/2)`` (also U.S. Army CERC, *Shore Protection Manual*, 1984,
+    deep-water fetch-limited growth), ``chi = g·F/U10²`` (F in m, U10 in m/s at 10 m). A wind sea
+    cannot exceed full development, so ``Hs`` is capped at the Pierson–Moskowitz value
+    ``0.21·U19.5²/g`` (reached at ``chi ≈ 1.91e4``).
+    """
+    if u10 <= 0.0 or fetch_km <= 0.0:
+        return 0.0
+    chi = jonswap_dimensionless_fetch(u10, fetch_km, gravity)
+    growth = JONSWAP_HS_GROWTH * math.sqrt(chi) * u10 * u10 / gravity
+    return min(growth, pierson_moskowitz_significant_wave_height(u10, gravity))
+
+
+def pierson_moskowitz_significant_wave_height(u10: float, gravity: float = GRAVITY) -> float:
+    """``Hs = 4·sqrt(m0)`` (m) of :func:`pierson_moskowitz` for a wind ``u10`` (m/s at 10 m):
+    ``m0 = alpha·g²/(4·beta·omega_0⁴)`` in closed form, i.e. ``Hs ≈ 0.21·U19.5²/g``
+    (Stewart 2008, eqs. 16.32–16.33)."""
+    u19_5 = wind_speed_19_5_from_10(u10)
+    if u19_5 <= 0.0:
+        return 0.0
+    omega_0 = gravity / u19_5
+    m0 = PHILLIPS_CONSTANT * gravity**2 / (4.0 * PM_BETA * omega_0**4)
+    return 4.0 * math.sqrt(m0)
+
+
+def jonswap_gamma_for_sea_state(hs_m: float, tp_s: float) -> float:
+    """Peak enhancement ``gamma`` of a JONSWAP sea of given ``Hs`` (m) and ``Tp`` (s):
+    ``5`` for ``Tp/sqrt(Hs) <= 3.6``, ``exp(5.75 - 1.15·Tp/sqrt(Hs))`` up to 5, ``1`` (the
+    Pierson–Moskowitz shape) above (DNV, *Environmental conditions and environmental loads*,
+    DNV-RP-C205, 2010, §3.5.5.5; ``Tp`` in s, ``Hs`` in m).
+
+    With the JONSWAP growth laws ``Tp/sqrt(Hs) = 2.28·chi^(1/12)`` (s/m^½), so ``gamma`` falls
+    from 5 at short fetch (``chi < 300``) through 3 (``chi ≈ 1e3``) to 1 at full development
+    (``Tp/sqrt(Hs) = 4.99`` for Pierson–Moskowitz): a fully developed sea has the
+    Pierson–Moskowitz shape, as it should.
+    """
+    if hs_m <= 0.0:
+        return 1.0
+    ratio = tp_s / math.sqrt(hs_m)
+    if ratio <= 3.6:
+        return 5.0
+    if ratio >= 5.0:
+        return 1.0
+    return math.exp(5.75 - 1.15 * ratio)
+
+
+@functools.lru_cache(maxsize=256)
+def jonswap_shape_integral(
+    gamma: float,
+    sigma_low: float = JONSWAP_SIGMA_LOW,
+    sigma_high: float = JONSWAP_SIGMA_HIGH,
+) -> float:
+    """Dimensionless ``I(gamma) = ∫ u⁻⁵·exp(-5/4·u⁻⁴)·gamma^r(u) du`` (``u = omega/omega_p``),
+    so that :func:`jonswap_shape` integrates to ``m0 = alpha·g²·I(gamma)/omega_p⁴``.
+    ``I(1) = 1/5`` exactly; DNV-RP-C205's normalising factor is ``A_gamma ≈ 1/(5·I(gamma))``
+    ``≈ 1 - 0.287·ln(gamma)``."""
+
+    def integrand(u: float) -> float:
+        sigma = sigma_low if u <= 1.0 else sigma_high
+        r = math.exp(-((u - 1.0) ** 2) / (2.0 * sigma * sigma))
+        return u**-5 * math.exp(-1.25 * u**-4) * gamma**r
+
+    value, _ = integrate.quad(
+        integrand, 0.05, 60.0, points=[0.7, 0.9, 1.0, 1.1, 1.5, 3.0], limit=200, epsrel=1e-10
+    )
+    return float(value)
+
+
+def jonswap_gamma(u10: float, fetch_km: float, gravity: float = GRAVITY) -> float:
+    """Default JONSWAP peak enhancement for a wind ``u10`` (m/s at 10 m) and fetch (km):
+    :func:`jonswap_gamma_for_sea_state` of the growth-law ``Hs`` and ``Tp``; exactly 1 once the
+    peak has reached full development (there ``Tp/sqrt(Hs) = 4.9996``, DNV's limit of 5 up to
+    the rounding of its coefficients), so that a fully developed sea is Pierson–Moskowitz."""
+    if jonswap_dimensionless_fetch(u10, fetch_km, gravity) >= fully_developed_dimensionless_fetch():
+        return 1.0
+    hs = jonswap_significant_wave_height(u10, fetch_km, gravity)
+    tp = 2.0 * math.pi / jonswap_peak_frequency(u10, fetch_km, gravity)
+    return jonswap_gamma_for_sea_state(hs, tp)
+
+
+def jonswap_alpha(
+    u10: float, fetch_km: float, gamma: float | None = None, gravity: float = GRAVITY
+) -> float:
+    """Equilibrium-range constant ``alpha`` (dimensionless) that gives the JONSWAP spectrum of
+    wind ``u10`` (m/s at 10 m) and fetch (km) the growth-law ``Hs``
+    (:func:`jonswap_significant_wave_height`) at the growth-law peak
+    (:func:`jonswap_peak_frequency`): ``alpha = (Hs/4)²·omega_p⁴/(g²·I(gamma))``.
+
+    This is how a JONSWAP sea is specified by ``(Hs, Tp, gamma)`` in engineering practice
+    (Goda 2010, eq. 2.12; DNV-RP-C205 §3.5.5). JONSWAP's separate fit ``0.076·chi^(-0.22)``
+    (:func:`jonswap_alpha_fit`) is not consistent with its own energy law: combined with
+    ``gamma = 3.3`` it overshoots ``Hs`` by 20–30 %, and beyond full development it gave
+    1.29× the Pierson–Moskowitz ``Hs`` — more than a fully developed sea can hold. ``gamma``
+    ``None`` uses :func:`jonswap_gamma`.
+    """
+    if gamma is None:
+        gamma = jonswap_gamma(u10, fetch_km, gravity)
+    hs = jonswap_significant_wave_height(u10, fetch_km, gravity)
+    omega_p = jonswap_peak_frequency(u10, fetch_km, gravity)
+    return (hs / 4.0) ** 2 * omega_p**4 / (gravity**2 * jonswap_shape_integral(float(gamma)))
 
 
 def jonswap_shape(
@@ -226,28 +342,29 @@ def jonswap(
     omega: ArrayLike,
     u10: float,
     fetch_km: float,
-    gamma: float = JONSWAP_GAMMA,
-    sigma_low: float = JONSWAP_SIGMA_LOW,
-    sigma_high: float = JONSWAP_SIGMA_HIGH,
+    gamma: float | None = None,
     gravity: float = GRAVITY,
 ) -> np.ndarray:
     """JONSWAP spectrum of a fetch-limited wind sea, ``S(omega)`` in m²·s/rad.
 
-    ``u10``: wind speed (m/s) at 10 m; ``fetch_km``: fetch (km). Peak frequency and ``alpha``
-    from the fetch laws of Hasselmann et al. (1973), see :func:`jonswap_peak_frequency` and
-    :func:`jonswap_alpha`; shape from :func:`jonswap_shape` (``gamma = 3.3``, ``sigma`` 0.07/0.09).
+    ``u10``: wind speed (m/s) at 10 m; ``fetch_km``: fetch (km). The sea state follows the
+    JONSWAP growth laws of Hasselmann et al. (1973), both capped at full development: peak
+    :func:`jonswap_peak_frequency`, ``Hs`` :func:`jonswap_significant_wave_height`; the shape is
+    :func:`jonswap_shape` (``sigma`` 0.07/0.09) with ``gamma`` (``None``:
+    :func:`jonswap_gamma`, 5 → 1 as the sea develops) and ``alpha`` from :func:`jonswap_alpha`,
+    so that ``4·sqrt(∫ S d omega)`` is exactly the growth-law ``Hs``.
     """
     omega = np.asarray(omega, dtype=float)
     if u10 <= 0.0 or fetch_km <= 0.0:
         return np.zeros_like(omega)
+    if gamma is None:
+        gamma = jonswap_gamma(u10, fetch_km, gravity)
     return jonswap_shape(
         omega,
         jonswap_peak_frequency(u10, fetch_km, gravity),
-        jonswap_alpha(u10, fetch_km, gravity),
+        jonswap_alpha(u10, fetch_km, gamma, gravity),
         gamma,
-        sigma_low,
-        sigma_high,
-        gravity,
+        gravity=gravity,
     )
 
 
@@ -348,7 +465,8 @@ class SeaSpectrum:
         name: spectrum family.
         wind_speed: wind speed at 10 m (m/s).
         fetch_km: fetch (km), used by JONSWAP only.
-        gamma: JONSWAP peak enhancement.
+        gamma: JONSWAP peak enhancement; ``None`` (default) uses the sea-state dependent
+            :func:`jonswap_gamma` (DNV-RP-C205), which is 1 for a fully developed sea.
         mean_direction: direction the waves travel toward (rad; 0 = +x, counter-clockwise).
         spreading: ``"cos2s"`` (Mitsuyasu frequency-dependent exponent, peak value ``s_max``) or
             ``"cos2"`` (Tessendorf's cos²).
@@ -359,7 +477,7 @@ class SeaSpectrum:
     name: SpectrumName = "jonswap"
     wind_speed: float = 6.0
     fetch_km: float = 100.0
-    gamma: float = JONSWAP_GAMMA
+    gamma: float | None = None
     mean_direction: float = 0.0
     spreading: SpreadingName = "cos2s"
     s_max: float = SPREADING_S_MAX
@@ -376,6 +494,11 @@ class SeaSpectrum:
         if self.name == "phillips":
             return phillips_peak_frequency(self.wind_speed, self.gravity)
         raise ValueError(f"unknown spectrum {self.name!r}")
+
+    @property
+    def peak_period(self) -> float:
+        """Peak period ``Tp = 2·pi/omega_p`` (s)."""
+        return 2.0 * math.pi / self.peak_omega
 
     @property
     def peak_wavenumber(self) -> float:

@@ -77,6 +77,29 @@ Sources (typical published values; checked for plausibility, not design data):
 
 Lengths are sampled uniformly in the class range when not given; every other proportion is
 sampled uniformly inside the documented range from the caller's ``rng`` (deterministic).
+
+Speeds through the water (knots; 1 kn = 1852/3600 m/s), typical service or operating speeds,
+used for the vessel's wake (:mod:`seahaze.ocean.wake`); :func:`sample_speed_m_s` draws
+uniformly inside the range:
+
+================  ==========  ===============================================================
+class             speed (kn)  sources (typical values)
+================  ==========  ===============================================================
+container_ship    16 – 24     [2]: design speeds about 19-25 kn (feeder to ULCV); slow
+                              steaming since 2009 at 16-18 kn
+bulk_carrier      12 – 15     [4]: design speeds about 13.5-15 kn, eco service 12-14 kn
+tanker            12 – 16     [6]: design speeds about 14-15.5 kn
+passenger_ferry   12 – 25     [9]: harbour ferries 12-16 kn; ro-pax 18-25 kn (Color Fantasy
+                              22 kn service)
+fishing_boat      3 – 12      [10]: trawling/hauling 3-5 kn, steaming 9-12 kn
+tug               6 – 13      [12]: Damen ASD 2411-3212 free-running 12-13 kn; harbour
+                              manoeuvring slower
+sailboat          3 – 9       [14]: displacement hull speed ``1.34·sqrt(LWL/ft)`` kn, 6-12 kn
+                              for 6-25 m; cruising under sail about 4-8 kn
+speedboat         15 – 40     [15]: planing runabouts/centre consoles cruise 20-35 kn, top
+                              speeds about 40-50 kn
+buoy              0           moored: no speed through the water (tidal current is ignored)
+================  ==========  ===============================================================
 """
 
 from __future__ import annotations
@@ -104,13 +127,18 @@ from seahaze.vessels.smallcraft import (
 
 __all__ = [
     "CLASS_NAMES",
+    "KNOT_M_S",
     "VESSEL_CLASSES",
     "VesselClass",
     "build_vessel",
     "class_id",
     "get_class",
     "sample_dimensions",
+    "sample_speed_m_s",
 ]
+
+KNOT_M_S = 1852.0 / 3600.0
+"""One knot in m/s (international nautical mile of 1852 m per hour)."""
 
 Builder = Callable[[PrincipalDims, np.random.Generator], list[VesselPart]]
 
@@ -135,6 +163,7 @@ class VesselClass:
     ``length_range_m``: overall length (for ``buoy``: float diameter), metres.
     ``beam_ratio_range``: beam / length. ``depth_ratio_range``: hull depth / length.
     ``draft_fraction_range``: draft / depth (ballast → laden).
+    ``service_speed_kn``: typical speed through the water under way (knots; module table).
     """
 
     name: str
@@ -145,6 +174,13 @@ class VesselClass:
     description: str
     source: str
     builder: Builder = field(repr=False, compare=False)
+    service_speed_kn: tuple[float, float] = (0.0, 0.0)
+
+    @property
+    def service_speed_range_m_s(self) -> tuple[float, float]:
+        """:attr:`service_speed_kn` in m/s."""
+        lo, hi = self.service_speed_kn
+        return lo * KNOT_M_S, hi * KNOT_M_S
 
     @property
     def class_id(self) -> int:
@@ -165,9 +201,18 @@ def _vessel_class(
     description: str,
     source: str,
     builder: Builder,
+    speed_kn: tuple[float, float] = (0.0, 0.0),
 ) -> VesselClass:
     return VesselClass(
-        name, length, beam_ratio, depth_ratio, draft_fraction, description, source, builder
+        name,
+        length,
+        beam_ratio,
+        depth_ratio,
+        draft_fraction,
+        description,
+        source,
+        builder,
+        speed_kn,
     )
 
 
@@ -185,6 +230,7 @@ VESSEL_CLASSES: dict[str, VesselClass] = {
             "Wikipedia 'Container ship' size categories; MAN ES 'Propulsion Trends in "
             "Container Vessels'; ACP 'Vessel Requirements' (Panamax/Neopanamax limits)",
             build_container_ship,
+            (16.0, 24.0),
         ),
         _vessel_class(
             "bulk_carrier",
@@ -196,6 +242,7 @@ VESSEL_CLASSES: dict[str, VesselClass] = {
             "funnel, deck cranes on geared ships.",
             "MAN ES 'Propulsion Trends in Bulk Carriers'; Wikipedia 'Bulk carrier'",
             build_bulk_carrier,
+            (12.0, 15.0),
         ),
         _vessel_class(
             "tanker",
@@ -208,6 +255,7 @@ VESSEL_CLASSES: dict[str, VesselClass] = {
             "MAN ES 'Propulsion Trends in Tankers'; Wikipedia 'Oil tanker' AFRA classes; "
             "Port Economics, Management and Policy 'Tanker sizes and classes'",
             build_tanker,
+            (12.0, 16.0),
         ),
         _vessel_class(
             "passenger_ferry",
@@ -219,6 +267,7 @@ VESSEL_CLASSES: dict[str, VesselClass] = {
             "bridge forward on the top tier, funnels aft.",
             "Wikipedia 'Ferry', 'Roll-on/roll-off' (ro-pax); published ferry particulars",
             build_passenger_ferry,
+            (12.0, 25.0),
         ),
         _vessel_class(
             "fishing_boat",
@@ -229,6 +278,7 @@ VESSEL_CLASSES: dict[str, VesselClass] = {
             "Trawler / seiner / longliner: strong sheer, wheelhouse, mast, stern gantry.",
             "FAO Fisheries Technical Paper 267 (fishery vessel types); Wikipedia 'Fishing trawler'",
             build_fishing_boat,
+            (3.0, 12.0),
         ),
         _vessel_class(
             "tug",
@@ -239,6 +289,7 @@ VESSEL_CLASSES: dict[str, VesselClass] = {
             "Harbour / ASD tug: beamy, high bow, heavy fender, tall all-round wheelhouse.",
             "Damen ASD Tug data sheets (2111, 2411, 2810, 2913, 3212); Wikipedia 'Tugboat'",
             build_tug,
+            (6.0, 13.0),
         ),
         _vessel_class(
             "sailboat",
@@ -249,6 +300,7 @@ VESSEL_CLASSES: dict[str, VesselClass] = {
             "Sailing yacht (sloop): low hull, coachroof, tall mast, mainsail and jib.",
             "ISO 8666 principal data definitions; production sailing-yacht specifications",
             build_sailboat,
+            (3.0, 9.0),
         ),
         _vessel_class(
             "speedboat",
@@ -259,6 +311,7 @@ VESSEL_CLASSES: dict[str, VesselClass] = {
             "Planing motorboat: deep-V hull, raked bow, cuddy / console / open layout, outboards.",
             "Wikipedia 'Motorboat'; production runabout / centre-console specifications",
             build_speedboat,
+            (15.0, 40.0),
         ),
         _vessel_class(
             "buoy",
@@ -271,6 +324,7 @@ VESSEL_CLASSES: dict[str, VesselClass] = {
             "IALA R1001 Maritime Buoyage System; IALA G1006 Plastic buoys; Trinity House "
             "buoy types; Chinese buoy standard series Φ1.2-3.0 m",
             build_buoy,
+            (0.0, 0.0),
         ),
     )
 }
@@ -320,6 +374,13 @@ def sample_dimensions(kind: str, length_m: float | None, rng: np.random.Generato
     depth = length * float(rng.uniform(*vc.depth_ratio_range))
     draft = depth * float(rng.uniform(*vc.draft_fraction_range))
     return PrincipalDims(kind, length, beam, depth, draft)
+
+
+def sample_speed_m_s(kind: str, rng: np.random.Generator) -> float:
+    """Speed through the water (m/s) drawn uniformly in the class's service-speed range
+    (:attr:`VesselClass.service_speed_kn`); 0 for a buoy. Uses one draw of ``rng``."""
+    lo, hi = get_class(kind).service_speed_range_m_s
+    return float(rng.uniform(lo, hi))
 
 
 def build_vessel(kind: str, length_m: float | None, rng: np.random.Generator) -> VesselModel:

@@ -1,0 +1,149 @@
+"""Whitecaps: the coverage law, the foam reflectance, and a foam field that covers the law's
+fraction of the world area at the breaking crests."""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from seahaze.ocean import FlatSurface, OceanParams, OceanSurface, make_surface
+from seahaze.ocean.base import invert_horizontal_displacement
+from seahaze.ocean.whitecaps import (
+    FOAM_REFLECTANCE,
+    FRESH_FOAM_REFLECTANCE,
+    FoamField,
+    foam_fraction,
+    whitecap_albedo,
+    whitecap_coverage,
+)
+
+
+def _surface(model: str, u10: float, **kw: object) -> OceanSurface:
+    params = replace(OceanParams(model=model, wind_speed=u10, fetch_km=200.0, seed=3), **kw)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return make_surface(params)
+
+
+def test_coverage_follows_monahan_and_omuircheartaigh() -> None:
+    """W = 3.84e-6 U10^3.41 (Monahan & O'Muircheartaigh 1980): about 1 % at 10 m/s and 4 % at
+    15 m/s."""
+    assert whitecap_coverage(10.0) == pytest.approx(0.00987, rel=2e-3)
+    assert whitecap_coverage(15.0) == pytest.approx(0.0394, rel=2e-3)
+    winds = np.array([3.0, 5.0, 8.0, 12.0, 20.0])
+    np.testing.assert_allclose(whitecap_coverage(winds), 3.84e-6 * winds**3.41, rtol=1e-12)
+    # Doubling the wind multiplies the coverage by 2^3.41 = 10.6.
+    assert whitecap_coverage(16.0) / whitecap_coverage(8.0) == pytest.approx(2.0**3.41)
+    assert whitecap_coverage(0.0) == 0.0
+    assert whitecap_coverage(-3.0) == 0.0
+    assert whitecap_coverage(60.0) == 1.0  # clipped far outside the fitted range
+
+
+def test_foam_reflectance_is_koepke_effective_value() -> None:
+    """Koepke (1984): effective whitecap reflectance 0.22 in the visible, from fresh foam of
+    0.55 (Whitlock et al. 1982) times an efficiency factor of about 0.4."""
+    assert pytest.approx(0.22) == FOAM_REFLECTANCE
+    assert pytest.approx(0.55) == FRESH_FOAM_REFLECTANCE
+    assert pytest.approx(0.4) == FOAM_REFLECTANCE / FRESH_FOAM_REFLECTANCE
+    assert whitecap_albedo(10.0) == pytest.approx(0.22 * 3.84e-6 * 10.0**3.41)
+
+
+@pytest.mark.parametrize("model", ["fft", "gerstner"])
+@pytest.mark.parametrize("u10", [8.0, 12.0, 15.0])
+def test_foam_covers_the_law_fraction_of_the_world_area(model: str, u10: float) -> None:
+    """Foam fraction averaged over uniformly spread world points (rest positions found by
+    inverting the choppy map), at another place and time than the calibration: within a
+    factor of 2 of W(U10) (measured: 0.86-1.1 x)."""
+    surface = _surface(model, u10, time_s=23.0)
+    foam = FoamField(surface, u10)
+    side = 20.0 * surface.peak_wavelength_m
+    x, y = np.random.default_rng(5).uniform(3000.0, 3000.0 + side, (2, 60_000))
+    x0, y0 = invert_horizontal_displacement(surface, x, y)
+    fraction = foam(x0, y0)
+    law = whitecap_coverage(u10)
+    assert law / 2.0 < float(np.mean(fraction)) < 2.0 * law
+    assert law / 2.0 < float(np.mean(fraction > 0.5)) < 2.0 * law
+    assert foam.mean_fraction == law
+
+
+@pytest.mark.parametrize("model", ["fft", "gerstner"])
+def test_foam_sits_where_the_surface_breaks(model: str) -> None:
+    """Foam marks the compressed crests: low Jacobian and high elevation."""
+    surface = _surface(model, 15.0)
+    foam = FoamField(surface, 15.0)
+    x, y = np.random.default_rng(1).uniform(0.0, 10.0 * surface.peak_wavelength_m, (2, 50_000))
+    f = foam(x, y)
+    jac = foam.breaking_jacobian(x, y)
+    height = surface.displacement(x, y)[2]
+    assert np.all(jac[f > 0.5] < foam.jacobian_threshold + 1e-9)
+    assert np.all(jac[f == 0.0] >= foam.jacobian_threshold)
+    assert np.average(height, weights=f) > 1.0 * np.std(height)  # on the crests
+    assert np.mean(jac[f > 0.5]) < np.mean(jac) - 0.1
+
+
+def test_foam_is_bounded_soft_edged_and_deterministic() -> None:
+    surface = _surface("fft", 12.0)
+    x, y = np.random.default_rng(2).uniform(-500.0, 500.0, (2, 40_000))
+    a = FoamField(surface, 12.0)(x, y)
+    assert a.min() >= 0.0 and a.max() <= 1.0
+    partial = np.mean((a > 0.02) & (a < 0.98))
+    assert 0.1 * np.mean(a) < partial  # edges ramp, the field is not a binary mask
+    b = FoamField(_surface("fft", 12.0), 12.0)(x, y)
+    assert a.tobytes() == b.tobytes()
+    c = FoamField(_surface("fft", 12.0, seed=4), 12.0)(x, y)
+    assert not np.array_equal(a, c)
+    np.testing.assert_array_equal(foam_fraction(surface, x[:10], y[:10], 12.0), a[:10])
+    # Along a fine line the field changes gradually (no jumps larger than the ramp allows).
+    line = np.linspace(0.0, 200.0, 20_001)
+    profile = FoamField(surface, 12.0)(line, np.zeros_like(line))
+    assert np.max(np.abs(np.diff(profile))) < 0.25
+
+
+def test_zero_choppiness_still_places_foam_on_crests() -> None:
+    surface = _surface("fft", 15.0, choppiness=0.0)
+    foam = FoamField(surface, 15.0)
+    x, y = np.random.default_rng(3).uniform(0.0, 2000.0, (2, 80_000))
+    f = foam(x, y)
+    # No horizontal displacement: rest area = world area.
+    assert np.mean(f) == pytest.approx(whitecap_coverage(15.0), rel=0.3)
+    height = surface.displacement(x, y)[2]
+    assert np.average(height, weights=f) > np.std(height)
+
+
+def test_flat_sea_and_calm_wind_have_no_foam() -> None:
+    x = np.linspace(0.0, 100.0, 11)
+    flat = FoamField(FlatSurface(), 12.0)
+    np.testing.assert_array_equal(flat(x, x), 0.0)
+    assert flat.mean_fraction == pytest.approx(whitecap_coverage(12.0))
+    calm = FoamField(_surface("fft", 6.0), 0.0)
+    np.testing.assert_array_equal(calm(x, x), 0.0)
+    assert math.isinf(calm.jacobian_threshold)
+
+
+def test_sea_mesh_carries_per_vertex_foam() -> None:
+    """``build_sea_mesh_data(..., foam=...)`` adds a foam fraction per vertex without moving a
+    vertex; far from the camera it is the mean coverage; ``build_sea_mesh`` is unchanged."""
+    from seahaze.ocean import build_sea_mesh, build_sea_mesh_data
+
+    surface = _surface("fft", 15.0)
+    foam = FoamField(surface, 15.0)
+    plain = build_sea_mesh_data(surface, camera_height_m=10.0, quality="low")
+    assert plain.foam is None
+    mesh = build_sea_mesh_data(surface, camera_height_m=10.0, quality="low", foam=foam)
+    np.testing.assert_array_equal(mesh.vertices, plain.vertices)
+    vertices, faces = build_sea_mesh(surface, camera_height_m=10.0, quality="low")
+    np.testing.assert_array_equal(faces, plain.faces)
+    np.testing.assert_array_equal(vertices, plain.vertices)
+    assert mesh.foam is not None and mesh.foam.shape == (len(mesh.vertices),)
+    assert mesh.foam.dtype == np.float32
+    assert mesh.foam.min() >= 0.0 and mesh.foam.max() <= 1.0
+    r = np.hypot(mesh.vertices[:, 0], mesh.vertices[:, 1])
+    far = r > mesh.fade_end_m
+    np.testing.assert_allclose(mesh.foam[far], whitecap_coverage(15.0), rtol=1e-6)
+    near = r < 0.5 * mesh.fade_start_m
+    assert mesh.foam[near].max() > 0.9  # resolved whitecaps near the camera
+    assert 0.3 * whitecap_coverage(15.0) < np.mean(mesh.foam[near] > 0.5) < 3.0 * 0.0393
