@@ -91,6 +91,16 @@ def measured_visibility_errors(mode: str, spp: int) -> tuple[np.ndarray, np.ndar
     return error, stderr
 
 
+def benchmark_world_digest() -> str:
+    """The geometry digest of the benchmark scene as this seahaze builds it."""
+    from seahaze.camera import Camera
+    from seahaze.sceneio import load_scene
+    from seahaze.world import build_geometry
+
+    spec, _ = load_scene(SCENE)
+    return build_geometry(spec, Camera.from_spec(spec.camera)).digest()
+
+
 def load_references() -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict]:
     """Reference radiance and luminance standard error per level, after checking checksums."""
     from seahaze.fileio import read_exr
@@ -98,6 +108,11 @@ def load_references() -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dic
     meta = json.loads((REFS / "references.json").read_text())
     if meta["scene_sha256"] != hashlib.sha256(SCENE.read_bytes()).hexdigest():
         raise SystemExit("scenes/benchmark.yaml changed since the references were rendered")
+    if meta.get("world_sha256") != benchmark_world_digest():
+        raise SystemExit(
+            "the benchmark scene's geometry changed since the references were rendered "
+            "(ocean or vessel generator): rerun scripts/make_references.py"
+        )
     for line in (REFS / "SHA256SUMS").read_text().split("\n"):
         if line.strip():
             digest, name = line.split()

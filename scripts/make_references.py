@@ -12,7 +12,9 @@ recorded, never hidden).
 Outputs in ``assets/references/benchmark/``: ``<level>.exr`` with channels R, G, B (mean linear
 radiance) and ``Y_SE`` (per-pixel standard error of the luminance), ``references.json`` (scene,
 levels, spp, batches, achieved error, wall time, Mitsuba version, variant) and ``SHA256SUMS``.
-The benchmark (``scripts/bench_modes.py``) checks the checksums and the scene hash before use.
+The benchmark (``scripts/bench_modes.py``) checks the checksums, the scene file's hash and the
+hash of its geometry (``SceneGeometry.digest``: a change in the ocean or vessel generators makes
+the references stale even when the scene file is unchanged) before use.
 
 Usage: nice -n 19 python scripts/make_references.py [--levels clean,300,1000,4000]
 """
@@ -126,6 +128,7 @@ def main() -> None:
     spec = with_overrides(spec, mode="reference", levels=[float(v) for v in LEVELS[1:]])
     session = open_session(spec)
     variant, camera, loaded = session.variant, session.camera, session.loaded
+    world = session.geometry.digest()
     haze = spec.haze
     args.work.mkdir(parents=True, exist_ok=True)
     OUT.mkdir(parents=True, exist_ok=True)
@@ -133,12 +136,13 @@ def main() -> None:
     digest = scene_digest()
     meta_path = OUT / "references.json"
     meta = json.loads(meta_path.read_text()) if meta_path.exists() else {}
-    if meta.get("scene_sha256") not in (None, digest):
-        meta = {}  # the scene changed: earlier references are stale
+    if meta.get("scene_sha256") not in (None, digest) or meta.get("world_sha256") != world:
+        meta = {}  # the scene or its geometry changed: earlier references are stale
     meta.update(
         {
             "scene": str(SCENE.relative_to(ROOT)),
             "scene_sha256": digest,
+            "world_sha256": world,
             "variant": variant,
             "mitsuba": mi.__version__,
             "integrator": "volpath",
@@ -151,7 +155,7 @@ def main() -> None:
 
     for level in args.levels.split(","):
         key = level_key(level)
-        work = args.work / f"{key}-{digest[:12]}.npz"
+        work = args.work / f"{key}-{digest[:12]}-{world[:12]}.npz"
         acc = Accumulator.load(work, shape)
         clean = level == "clean"
         sigma = 0.0 if clean else extinction_coefficient(float(level), haze.threshold)

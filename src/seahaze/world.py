@@ -62,6 +62,21 @@ class SceneGeometry:
     surface: ocean.OceanSurface
     vessels: list[VesselInstance]
 
+    def digest(self) -> str:
+        """SHA-256 of every mesh and material: two worlds with the same digest render the same
+        images (converged references record it, so a changed generator makes them stale)."""
+        import hashlib
+
+        h = hashlib.sha256()
+        meshes = [self.sea, *(part for v in self.vessels for part in v.parts)]
+        for mesh in meshes:
+            h.update(mesh.name.encode())
+            h.update(np.ascontiguousarray(mesh.vertices, np.float32).tobytes())
+            h.update(np.ascontiguousarray(mesh.faces, np.uint32).tobytes())
+            h.update(np.asarray([*mesh.rgb, mesh.roughness], np.float64).tobytes())
+        h.update(np.float64(self.sea_roughness).tobytes())
+        return h.hexdigest()
+
 
 def ocean_params(spec: SceneSpec) -> ocean.OceanParams:
     """Ocean generator parameters for a scene (Beaufort force, when given, sets the wind)."""
