@@ -1,8 +1,9 @@
 """Benchmark dataset batches: scenes per hour of the default scene with 1 and 2 local workers.
 
 Each configuration runs ``seahaze render scenes/default.yaml --scenes N`` as a fresh process into
-an empty temporary folder (clean image + the 11 graded levels, `asm` mode, the scene's 64 spp),
-so the wall time includes start-up, geometry, kernel compilation and every write. Throughput is
+an empty temporary folder (clean image + the 11 graded levels, `physical` mode in one pass, the
+scene's 32 spp), so the wall time includes start-up, geometry, kernel compilation and every
+write. Throughput is
 scenes / wall time; the per-scene time is the median of the JSON-lines log's ``scene_done``
 seconds. The MSVD projection divides 1026 scenes (12,312 images = 1026 × (clean + 11 levels))
 by the throughput. Results go to the "batch" section of docs/benchmarks.md.
@@ -76,7 +77,7 @@ def write_section(rows: list[dict]) -> None:
     """Write the batch table and the MSVD projection into docs/benchmarks.md."""
     cores = len(os.sched_getaffinity(0))
     lines = [
-        "## Dataset batches, default scene (clean + 11 levels, `asm`, 64 spp)",
+        "## Dataset batches, default scene (clean + 11 levels, `physical`, 32 spp)",
         "",
         f"Machine: {platform.machine()}, {cores} vCPU, shared with other work (1-minute load "
         "average before and after each run in the table); variant `llvm_ad_rgb`. Each row is "

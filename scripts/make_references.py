@@ -180,7 +180,7 @@ def main() -> None:
                 f"relative stderr {acc.relative_error():.4f}, {acc.seconds:.0f} s",
                 flush=True,
             )
-        from seahaze.imaging import write_exr
+        from seahaze.fileio import write_exr
 
         write_exr(
             OUT / f"{key}.exr",

@@ -18,8 +18,9 @@ import pytest
 from conftest import box_vessel, load_flat_scene, small_spec
 from seahaze.haze import HAZE_BOTTOM_M, hg_phase
 from seahaze.render import passes
-from seahaze.render.diffuse_table import TableGrid, build_diffuse_table
+from seahaze.render.diffuse_table import TableGrid, build_tables
 from seahaze.render.levels import LevelRenderer
+from seahaze.render.photon_tracer import SeaReflectance
 from seahaze.visibility import channel_extinction
 
 pytestmark = pytest.mark.usefixtures("mitsuba_variant")
@@ -34,10 +35,6 @@ def _uniform_sky_photons(n: int, radiance: float, rng: np.random.Generator):
     return d, w
 
 
-def _black_sea(d, rng):
-    return d * np.array([1, 1, -1]), np.zeros((len(d), 3))
-
-
 @pytest.mark.parametrize("g", [0.0, 0.75])
 def test_table_equals_single_scattering_quadrature_in_thin_haze(g: float) -> None:
     rng = np.random.default_rng(3)
@@ -45,7 +42,8 @@ def test_table_equals_single_scattering_quadrature_in_thin_haze(g: float) -> Non
     sky = _uniform_sky_photons(400_000, radiance, rng)
     no_sun = (np.zeros((0, 3)), np.zeros((0, 3)))
     grid = TableGrid(n_z=4)
-    table = build_diffuse_table(no_sun, sky, _black_sea, sigma, albedo, g, top, 0.0, 1, grid)
+    black = SeaReflectance.black()
+    (table,) = build_tables(no_sun, sky, black, [sigma], albedo, g, top, 0.0, 1, grid)
     # Quadrature over the downward hemisphere for travel directions ω at bin centres, from
     # straight down through the horizon (where the sky's edge meets the phase peak) to up.
     mu = -1.0 + (np.array([2, 12, 20, 23, 24, 26, 36, 46]) + 0.5) * 2.0 / grid.n_mu
@@ -71,7 +69,7 @@ def test_table_is_zero_without_scattering() -> None:
     rng = np.random.default_rng(0)
     sky = _uniform_sky_photons(10_000, 1.0, rng)
     sun = (np.tile([[0.3, 0.0, -0.954]], (1000, 1)), np.full((1000, 3), 1e-3))
-    table = build_diffuse_table(sun, sky, _black_sea, 1e-3, 0.0, 0.7, 300.0, 0.0, 2)
+    (table,) = build_tables(sun, sky, SeaReflectance.black(), [1e-3], 0.0, 0.7, 300.0, 0.0, 2)
     assert np.all(table.values == 0.0)
 
 

@@ -43,6 +43,9 @@ class RenderPass(IntEnum):
     REFERENCE_LEVEL = 1
     AIRLIGHT = 2
     PHYSICAL_LEVEL = 3
+    """Retired: the per-level physical renders before one pass served every level."""
+    PHYSICAL_PASS = 4
+    """The physical mode's one pass: the clean image and every level, common random numbers."""
     CONVERGED_REFERENCE = 99
     """Batches of the converged benchmark references (scripts/make_references.py)."""
     VERIFY = 0x7E51F

@@ -95,8 +95,9 @@ class SceneSession:
     pixels: GeometryPass
     """Per-pixel distance, instances and ray directions (the depth file and the labels)."""
 
-    def level_renderer(self, clean: np.ndarray) -> LevelRenderer:
-        """The renderer of this scene's hazy levels in the spec's mode (``clean``: for asm)."""
+    def level_renderer(self, clean: np.ndarray | None = None) -> LevelRenderer:
+        """The renderer of this scene's hazy levels in the spec's mode (``clean``: the clean
+        pass, which ``asm`` composites; the physical mode renders its own)."""
         spec = self.spec
         return LevelRenderer(
             spec.render.mode, self.loaded, self.pixels, clean, spec.haze, spec.render
@@ -149,19 +150,27 @@ def render_scene(spec: SceneSpec, name: str, progress: Progress = _quiet) -> Sce
     n_vessels = len(session.geometry.vessels)
     progress(f"{name}: scene loaded ({session.variant}, {n_vessels} vessels)")
     haze, mode = spec.haze, spec.render.mode
-    with _timed(timings, "clean"):
-        clean = session.render_clean()
-    progress(f"{name}: clean pass {timings['clean']:.1f} s")
-
-    renderer = session.level_renderer(clean)
-    rendered = []
-    for i, v in enumerate(spec.haze.levels):
-        sigma = channel_extinction(v, haze.threshold, haze.extinction_spectrum)
-        key = level_name(v)
-        with _timed(timings, f"level_{key}"):
-            level = renderer.render(sigma, i)
-        rendered.append(RenderedLevel(key, v, sigma, level.radiance, level.airlight))
-        progress(f"{name}: {key} ({mode}) {timings[f'level_{key}']:.1f} s")
+    sigmas = [channel_extinction(v, haze.threshold, haze.extinction_spectrum) for v in haze.levels]
+    names = [level_name(v) for v in haze.levels]
+    if mode == "physical":
+        # One set of camera paths for the clean image and every level.
+        with _timed(timings, "pass"):
+            clean, levels = session.level_renderer().render_all(sigmas)
+        progress(f"{name}: clean + {len(levels)} levels in one pass, {timings['pass']:.1f} s")
+    else:
+        with _timed(timings, "clean"):
+            clean = session.render_clean()
+        progress(f"{name}: clean pass {timings['clean']:.1f} s")
+        renderer = session.level_renderer(clean)
+        levels = []
+        for i, (key, sigma) in enumerate(zip(names, sigmas, strict=True)):
+            with _timed(timings, f"level_{key}"):
+                levels.append(renderer.render(sigma, i))
+            progress(f"{name}: {key} ({mode}) {timings[f'level_{key}']:.1f} s")
+    rendered = [
+        RenderedLevel(key, v, sigma, level.radiance, level.airlight)
+        for key, v, sigma, level in zip(names, haze.levels, sigmas, levels, strict=True)
+    ]
     return _assemble(session, name, clean, rendered, timings)
 
 

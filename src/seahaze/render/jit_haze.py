@@ -37,3 +37,34 @@ def hg_phase(cos_theta: Any, g: Any) -> Any:
 
     denom = 1.0 + g * g - 2.0 * g * cos_theta
     return (1.0 - g * g) / (FOUR_PI * denom * dr.sqrt(denom))
+
+
+def hg_sample_cos(u: Any, g: Any) -> Any:
+    """Cosine of a scattering angle drawn from the HG phase function for uniform ``u``; as
+    :func:`seahaze.haze.hg_sample_cos`. ``g`` may be an opaque drjit value (no recompilation
+    for another ``g``): the isotropic case is a select, not a Python branch."""
+    import drjit as dr
+
+    sq = (1.0 - g * g) / (1.0 - g + 2.0 * g * u)
+    anisotropic = dr.clip((1.0 + g * g - sq * sq) / (2.0 * g), -1.0, 1.0)
+    return dr.select(dr.abs(g) < 1e-3, 1.0 - 2.0 * u, anisotropic)
+
+
+def rotate_directions(d: tuple[Any, Any, Any], cos_theta: Any, phi: Any) -> tuple[Any, Any, Any]:
+    """Unit vectors at angle ``acos(cos_theta)`` from the unit vector ``d`` (components), azimuth
+    ``phi``; as :func:`seahaze.haze.rotate_directions` (the same orthonormal frame)."""
+    import drjit as dr
+
+    dx, dy, dz = d
+    sin_theta = dr.sqrt(dr.maximum(0.0, 1.0 - cos_theta * cos_theta))
+    sign = dr.select(dz >= 0.0, 1.0, -1.0)
+    a = -1.0 / (sign + dz)
+    b = dx * dy * a
+    tx, ty, tz = 1.0 + sign * dx * dx * a, sign * b, -sign * dx
+    sx, sy, sz = b, sign + dy * dy * a, -dy
+    cp, sp = sin_theta * dr.cos(phi), sin_theta * dr.sin(phi)
+    ox = cp * tx + sp * sx + cos_theta * dx
+    oy = cp * ty + sp * sy + cos_theta * dy
+    oz = cp * tz + sp * sz + cos_theta * dz
+    norm = dr.rsqrt(ox * ox + oy * oy + oz * oz)
+    return ox * norm, oy * norm, oz * norm

@@ -4,10 +4,11 @@ The scene render (:mod:`seahaze.render.engine`), ``seahaze verify`` and the benc
 levels through :class:`LevelRenderer`, so a mode behaves the same everywhere.
 
 Modes
-    ``physical``   seahaze's haze integrator (:mod:`seahaze.render.physical`): analytic
-                   transmittance, the sun's single scattering with shadow rays, the rest of the
-                   scattered light from a per-level plane-parallel table. Its scene has no
-                   Mitsuba medium (``build_scene(..., haze_box=False)``).
+    ``physical``   seahaze's haze integrator (:mod:`seahaze.render.physical`): the clean image
+                   and every level from one set of camera paths, analytic transmittance, the
+                   sun's single scattering with shadow rays, the rest of the scattered light
+                   from per-level plane-parallel tables. Its scene has no Mitsuba medium
+                   (``build_scene(..., haze_box=False)``).
     ``reference``  Mitsuba ``volpath`` through the haze box (:mod:`seahaze.render.passes`).
     ``asm``        The atmospheric scattering model from the clean image, the exact distance
                    and a rendered horizon airlight (:mod:`seahaze.render.passes`).
@@ -52,12 +53,14 @@ class LevelRenderer:
         mode: str,
         loaded: LoadedScene,
         geometry: GeometryPass,
-        clean: np.ndarray,
+        clean: np.ndarray | None,
         haze: HazeSpec,
         render: RenderSpec,
     ):
         if mode not in RENDER_MODES:
             raise ValueError(f"unknown render mode {mode!r}; allowed: {', '.join(RENDER_MODES)}")
+        if mode == "asm" and clean is None:
+            raise ValueError("the asm mode composites the clean pass: give it")
         if mode == "physical" and (loaded.spec is None or loaded.has_haze_box):
             raise ValueError(
                 "the physical mode needs a scene from build_scene(..., haze_box=False): it "
@@ -90,12 +93,28 @@ class LevelRenderer:
             )
             radiance = passes.asm_level(self.clean, self.geometry, sigma, airlight.rgb, haze.top_m)
             return LevelRender(radiance, airlight)
+        # Physical: one pass from the scene's camera paths (whatever the level index), so a
+        # level rendered alone equals its member of a pass over all levels.
+        return self.render_all([sigma], render, haze)[1][0]
+
+    def render_all(
+        self,
+        sigmas: list[Extinction],
+        render: RenderSpec | None = None,
+        haze: HazeSpec | None = None,
+    ) -> tuple[np.ndarray, list[LevelRender]]:
+        """The clean radiance and every level of extinction ``sigmas``: in the physical mode
+        from one set of camera paths (the clean radiance is its σ = 0 member); otherwise the
+        clean pass given at construction and one render per level."""
+        render, haze = render or self.settings, haze or self.haze
+        if self.mode != "physical":
+            return self.clean, [self.render(s, i, render, haze) for i, s in enumerate(sigmas)]
         if self._physical is None:
-            assert loaded.spec is not None  # checked in __init__
-            self._physical = PhysicalRenderer(loaded, loaded.spec)
-        seed = render_seed(render.seed, RenderPass.PHYSICAL_LEVEL, level_index)
-        radiance, _ = self._physical.render(sigma, haze.albedo, haze.g, render.spp, seed)
-        return LevelRender(radiance)
+            assert self.loaded.spec is not None  # checked in __init__
+            self._physical = PhysicalRenderer(self.loaded, self.loaded.spec)
+        seed = render_seed(render.seed, RenderPass.PHYSICAL_PASS)
+        out = self._physical.render(sigmas, haze.albedo, haze.g, render.spp, seed)
+        return out.clean, [LevelRender(r) for r in out.levels]
 
 
 def render_level(

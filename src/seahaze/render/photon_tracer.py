@@ -1,0 +1,323 @@
+"""The diffuse-field photon tracer of :mod:`seahaze.render.diffuse_table`, compiled with drjit.
+
+Every level's photons are traced in one kernel: a lane is one photon of one level, its
+extinction gathered from the level's ``σ``, so eleven levels cost one launch and the kernel is
+the same for every scene (no value is baked into it). The physics is the numpy description in
+:mod:`seahaze.render.diffuse_table`; what is specific to the compiled version:
+
+* **Lanes.** Per level, one lane per sun photon that reaches the sea on its first flight, one
+  per sun photon that scatters on the way down (the first flight is split, as described there),
+  and one per sky photon.
+* **Random numbers.** One PCG32 stream per photon (``seed``, photon index), shared by that
+  photon's lanes at every level; five draws per flight.
+* **Deterministic tallies.** Track lengths are summed as integers: every contribution is
+  rounded to a fixed point of :data:`FIXED_POINT` units per (normalised) photon weight, and
+  integer addition does not depend on the order in which threads add. Floating-point sums
+  would make the table — and every image — differ in its last bits from run to run. The
+  rounding error is below 1e-9 of a photon's weight.
+* **Packet scatters.** Each tally cell holds eight integers (the full-bin and partial-bin sums of
+  R, G, B, each padded to four), added by one packet scatter into per-thread copies of the
+  tally (drjit's ``ReduceMode.Expand``), which are summed at the end — exact for integers, and
+  several times faster than eight atomic additions on a CPU.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import jit_haze
+
+FIXED_POINT = float(2**30)
+"""Tally units per unit of normalised photon weight (a photon weighs about one)."""
+WEIGHT_FLOOR = 1.0e-4
+"""Russian roulette below this fraction of the mean source photon weight."""
+MAX_FLIGHTS = 4000
+MU_FLOOR = 1.0e-6
+"""|μ| floor of the track-length division: a flight within 1e-6 of horizontal has probability
+~1e-6 and its length in the bin is underestimated at worst."""
+_DRAWS = 5
+CELL = 8
+"""Integers per tally cell: full-bin R, G, B, pad, partial-bin R, G, B, pad (a packet)."""
+
+
+@dataclass(frozen=True)
+class SeaReflectance:
+    """The sea's BSDF pre-sampled for photons: per incidence bin (``μ`` of the arriving travel
+    direction, ``n_mu`` equal bins over (0, 1]) ``per_bin`` outgoing travel directions in the
+    plane of incidence (arriving from −x) with their RGB weights (importance transport)."""
+
+    wo: np.ndarray
+    """(n_mu, per_bin, 3) unit outgoing travel directions, z > 0."""
+    weight: np.ndarray
+    """(n_mu, per_bin, 3) RGB weights (BSDF × cos / pdf); zero where a sample failed."""
+
+    @classmethod
+    def black(cls) -> SeaReflectance:
+        """A sea that reflects nothing."""
+        return cls(np.array([[[0.0, 0.0, 1.0]]]), np.zeros((1, 1, 3)))
+
+    @property
+    def n_mu(self) -> int:
+        return self.wo.shape[0]
+
+    @property
+    def per_bin(self) -> int:
+        return self.wo.shape[1]
+
+    def reflect(self, d: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """Reflected travel directions and RGB weights for downward travel directions ``d``
+        (numpy; the tracer does the same in drjit). A photon takes a random pre-drawn outgoing
+        direction of its incidence bin, rotated to its own azimuth — exact for an isotropic
+        BSDF up to the binning of the incidence angle."""
+        mu_bin = np.clip((-d[:, 2] * self.n_mu).astype(np.int64), 0, self.n_mu - 1)
+        pick = rng.integers(0, self.per_bin, len(d))
+        wo = self.wo[mu_bin, pick]
+        azimuth = np.arctan2(d[:, 1], d[:, 0])
+        c, s = np.cos(azimuth), np.sin(azimuth)
+        out = np.stack([c * wo[:, 0] - s * wo[:, 1], s * wo[:, 0] + c * wo[:, 1], wo[:, 2]], axis=1)
+        return out, self.weight[mu_bin, pick]
+
+
+@dataclass(frozen=True)
+class Slab:
+    """The slab a table is traced in, and the bins it is tallied into."""
+
+    top_m: float
+    albedo: float
+    g: float
+    sun_azimuth_rad: float
+    n_z: int
+    n_mu: int
+    n_phi: int
+
+    @property
+    def n_dir(self) -> int:
+        return self.n_mu * self.n_phi
+
+
+def trace_fluence(
+    sun: tuple[np.ndarray, np.ndarray],
+    sky: tuple[np.ndarray, np.ndarray],
+    sea: SeaReflectance,
+    sigmas: Sequence[float],
+    slab: Slab,
+    seed: int,
+) -> np.ndarray:
+    """Directional fluence ``Φ[level, z, dir, rgb]`` (W m⁻²) of the diffuse field of every
+    extinction in ``sigmas`` (1/m, each > 0), from the same source photons (downward travel
+    directions and horizontal irradiance weights, numpy) with independent random numbers."""
+    import drjit as dr
+    import mitsuba as mi
+
+    # An empty source becomes one photon of zero weight (inactive from the start), so every
+    # gather below has data to read.
+    sun_d, sun_w = _nonempty(*sun)
+    sky_d, sky_w = _nonempty(*sky)
+    n_sun, n_sky, n_levels = len(sun_d), len(sky_d), len(sigmas)
+    weights = np.concatenate([sun_w, sky_w])
+    scale = float(weights.max(axis=1).mean()) if len(weights) else 1.0
+    per_level = 2 * n_sun + n_sky
+    lanes = n_levels * per_level
+    cells = n_levels * slab.n_z * slab.n_dir
+    if lanes == 0 or scale <= 0.0:
+        return np.zeros((n_levels, slab.n_z, slab.n_dir, 3))
+
+    # Per lane: level, kind (0 sun to the sea, 1 sun scattering, 2 sky) and source photon.
+    lane = np.arange(per_level)
+    kind_np = np.where(lane < n_sun, 0, np.where(lane < 2 * n_sun, 1, 2))
+    source_np = np.where(kind_np == 2, lane - 2 * n_sun, lane % max(n_sun, 1))
+    level = mi.UInt32(np.repeat(np.arange(n_levels), per_level).astype(np.uint32))
+    kind = mi.UInt32(np.tile(kind_np, n_levels).astype(np.uint32))
+    source = mi.UInt32(np.tile(source_np, n_levels).astype(np.uint32))
+    from_sky = kind == 2
+
+    def column(sun_values: np.ndarray, sky_values: np.ndarray, i: int) -> mi.Float:
+        a = dr.gather(mi.Float, mi.Float(sun_values[:, i]), source, ~from_sky)
+        b = dr.gather(mi.Float, mi.Float(sky_values[:, i]), source, from_sky)
+        return dr.select(from_sky, b, a)
+
+    d = tuple(column(sun_d, sky_d, i) for i in range(3))
+    w = tuple(column(sun_w / scale, sky_w / scale, i) for i in range(3))
+    # An opaque kernel parameter, padded: drjit treats a one-element array as a scalar whose
+    # load alignment (hence the kernel's hash, and a recompilation) varies with its address.
+    sigma_values = mi.Float(np.append(np.asarray(sigmas, np.float32), np.float32(0.0)))
+    dr.make_opaque(sigma_values)
+    sigma = dr.gather(mi.Float, sigma_values, level)
+    # Stream = photon index, the same at every level: photon i of each level draws the same
+    # random numbers (correlated table noise across levels, and a level's table does not
+    # depend on which other levels are traced with it).
+    photon = mi.UInt64(np.tile(np.arange(per_level, dtype=np.uint64), n_levels))
+    rng = mi.PCG32(lanes)  # the constructor would add the lane index: seed explicitly
+    rng.seed(dr.opaque(mi.UInt64, seed) + photon, photon)
+    tables = _SeaTables(sea)
+    params = _Params(slab)
+
+    z, d, w = _first_flight(kind, d, w, sigma, rng, tables, params)
+    tally = dr.zeros(mi.Int64, cells * CELL)
+    base = level * (slab.n_z * slab.n_dir)
+    active = dr.full(mi.Bool, True, lanes) & (dr.max(w) > 0.0)
+    flights = dr.zeros(mi.UInt32, lanes)
+
+    def cond(z, dx, dy, dz, wr, wg, wb, active, flights, rng):
+        return active
+
+    def body(z, dx, dy, dz, wr, wg, wb, active, flights, rng):
+        d, w = (dx, dy, dz), (wr, wg, wb)
+        u = [rng.next_float32() for _ in range(_DRAWS)]
+        free = -dr.log(dr.maximum(1.0 - u[0], 1e-30)) / sigma
+        boundary = dr.select(dz > 0, (params.top - z) / dz, dr.select(dz < 0, -z / dz, dr.inf))
+        step = dr.minimum(free, boundary)
+        z_end = dr.clip(z + step * dz, 0.0, params.top)
+        _tally(tally, base, z, z_end, d, w, active, params)
+        collide = free < boundary
+        at_sea = ~collide & (dz < 0)
+        cos_t = jit_haze.hg_sample_cos(u[1], params.g)
+        scattered = jit_haze.rotate_directions(d, cos_t, 2.0 * dr.pi * u[2])
+        reflected, sea_w = tables.reflect(d, u[3])
+        d = tuple(dr.select(collide, a, b) for a, b in zip(scattered, reflected, strict=True))
+        w = tuple(
+            dr.select(collide, c * params.albedo, c * s) for c, s in zip(w, sea_w, strict=True)
+        )
+        z = dr.select(collide, z_end, 0.0)
+        active &= collide | at_sea
+        # Russian roulette keeps the expectation: survivors below the floor are lifted to it.
+        wmax = dr.maximum(dr.maximum(w[0], w[1]), w[2])
+        low = wmax < WEIGHT_FLOOR
+        survive = ~low | (u[4] * WEIGHT_FLOOR < wmax)
+        lift = WEIGHT_FLOOR / dr.maximum(wmax, 1e-30)
+        w = tuple(dr.select(low & survive, c * lift, c) for c in w)
+        flights += 1
+        # A photon exactly horizontal cannot leave: vanishingly rare.
+        active &= survive & (d[2] != 0.0) & (flights < MAX_FLIGHTS)
+        return (z, *d, *w, active, flights, rng)
+
+    dr.while_loop((z, *d, *w, active, flights, rng), cond, body)
+    dr.eval(tally)
+    sums = np.array(tally).reshape(n_levels, slab.n_z, slab.n_dir, CELL)
+    return _fluence(sums[..., 0:3], sums[..., 4:7], slab) * scale
+
+
+def _nonempty(d: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    if len(d):
+        return d, w
+    return np.array([[0.0, 0.0, -1.0]]), np.zeros((1, 3))
+
+
+@dataclass(frozen=True)
+class _Params:
+    """Scalars of the slab as opaque drjit values, so they are kernel inputs, not literals."""
+
+    top: object
+    albedo: object
+    g: object
+    sun_azimuth: object
+    dz_bin: object
+    slab: Slab
+
+    def __init__(self, slab: Slab) -> None:
+        import drjit as dr
+        import mitsuba as mi
+
+        object.__setattr__(self, "top", dr.opaque(mi.Float, slab.top_m))
+        object.__setattr__(self, "albedo", dr.opaque(mi.Float, slab.albedo))
+        object.__setattr__(self, "g", dr.opaque(mi.Float, slab.g))
+        object.__setattr__(self, "sun_azimuth", dr.opaque(mi.Float, slab.sun_azimuth_rad))
+        object.__setattr__(self, "dz_bin", dr.opaque(mi.Float, slab.top_m / slab.n_z))
+        object.__setattr__(self, "slab", slab)
+
+
+class _SeaTables:
+    """:class:`SeaReflectance` uploaded for gathers in the kernel."""
+
+    def __init__(self, sea: SeaReflectance) -> None:
+        import mitsuba as mi
+
+        self.n_mu, self.per_bin = sea.n_mu, sea.per_bin
+        self.wo = [mi.Float(np.ascontiguousarray(sea.wo[..., i]).ravel()) for i in range(3)]
+        self.weight = [mi.Float(np.ascontiguousarray(sea.weight[..., i]).ravel()) for i in range(3)]
+
+    def reflect(self, d, u):
+        """Reflected travel direction and RGB weight for downward travel direction ``d``."""
+        import drjit as dr
+        import mitsuba as mi
+
+        dx, dy, dz = d
+        mu_bin = mi.UInt32(dr.clip(mi.Int32(-dz * self.n_mu), 0, self.n_mu - 1))
+        pick = dr.minimum(mi.UInt32(u * self.per_bin), self.per_bin - 1)
+        index = mu_bin * self.per_bin + pick
+        wo = [dr.gather(mi.Float, c, index) for c in self.wo]
+        weight = tuple(dr.gather(mi.Float, c, index) for c in self.weight)
+        azimuth = dr.atan2(dy, dx)
+        c, s = dr.cos(azimuth), dr.sin(azimuth)
+        out = (c * wo[0] - s * wo[1], s * wo[0] + c * wo[1], wo[2])
+        return out, weight
+
+
+def _first_flight(kind, d, w, sigma, rng, tables: _SeaTables, params: _Params):
+    """Start state after the untallied first flight: sun photons reflected at the sea (kind 0)
+    with weight ``exp(−τ/|μ|)``, sun photons scattered on the way down (kind 1) at a point from
+    the truncated exponential with weight ``(1 − exp(−τ/|μ|))·albedo``, sky photons (kind 2)
+    entering at the top."""
+    import drjit as dr
+
+    u = [rng.next_float32() for _ in range(4)]
+    top = params.top
+    t_sea = dr.exp(-sigma * top / -d[2])
+    reflected, sea_w = tables.reflect(d, u[0])
+    s = -dr.log(dr.maximum(1.0 - u[1] * (1.0 - t_sea), 1e-30)) / sigma
+    cos_t = jit_haze.hg_sample_cos(u[2], params.g)
+    scattered = jit_haze.rotate_directions(d, cos_t, 2.0 * dr.pi * u[3])
+    to_sea, scatters = kind == 0, kind == 1
+    z = dr.select(to_sea, 0.0, dr.select(scatters, top + s * d[2], top))
+    new_d = tuple(
+        dr.select(to_sea, r, dr.select(scatters, sc, c))
+        for r, sc, c in zip(reflected, scattered, d, strict=True)
+    )
+    new_w = tuple(
+        dr.select(to_sea, c * t_sea * sw, dr.select(scatters, c * (1.0 - t_sea) * params.albedo, c))
+        for c, sw in zip(w, sea_w, strict=True)
+    )
+    return z, new_d, new_w
+
+
+def _tally(tally, base, z0, z1, d, w, active, params: _Params) -> None:
+    """Track-length tally of flights from ``z0`` to ``z1``: ``(w/|μ|)(A_b(z_hi) − A_b(z_lo))``
+    with ``A_b(z) = |[0, z] ∩ bin_b|``, accumulated as full-bin counts and partial lengths (see
+    :func:`_fluence`) in fixed point, one packet of :data:`CELL` integers per flight end."""
+    import drjit as dr
+    import mitsuba as mi
+
+    slab = params.slab
+    dx, dy, dz = d
+    mu_bin = mi.UInt32(dr.clip(mi.Int32((dz + 1.0) * 0.5 * slab.n_mu), 0, slab.n_mu - 1))
+    phi = dr.atan2(dy, dx) - params.sun_azimuth
+    phi = dr.abs(dr.atan2(dr.sin(phi), dr.cos(phi)))
+    phi_bin = mi.UInt32(dr.clip(mi.Int32(phi / dr.pi * slab.n_phi), 0, slab.n_phi - 1))
+    dir_bin = mu_bin * slab.n_phi + phi_bin
+    inv_mu = 1.0 / dr.maximum(dr.abs(dz), MU_FLOOR)
+    for end, sign in ((dr.maximum(z0, z1), 1.0), (dr.minimum(z0, z1), -1.0)):
+        zc = dr.clip(end, 0.0, params.top)
+        zb = mi.UInt32(dr.minimum(mi.Int32(zc / params.dz_bin), slab.n_z - 1))
+        frac = dr.clip(zc / params.dz_bin - mi.Float(zb), 0.0, 1.0)
+        cell = base + zb * slab.n_dir + dir_bin
+        c = [sign * w[ch] * inv_mu * FIXED_POINT for ch in range(3)]
+        zero = mi.Int64(0)
+        packet = [mi.Int64(dr.round(x)) for x in c] + [zero]
+        packet += [mi.Int64(dr.round(x * frac)) for x in c] + [zero]
+        # Per-thread copies, no atomics: exact and order-independent for integers.
+        dr.scatter_add(tally, mi.ArrayXi64(packet), cell, active, mode=dr.ReduceMode.Expand)
+
+
+def _fluence(full: np.ndarray, partial: np.ndarray, slab: Slab) -> np.ndarray:
+    """``Φ[level, z, dir, rgb]`` from the tallies (level, z, dir, rgb): bins strictly below a
+    height's bin are covered in full (a reversed cumulative sum), its own bin in part."""
+    full_len = full.astype(np.float64) / FIXED_POINT
+    part_len = partial.astype(np.float64) / FIXED_POINT
+    above = np.cumsum(full_len[:, ::-1], axis=1)[:, ::-1]
+    below = np.zeros_like(full_len)
+    below[:, :-1] = above[:, 1:]
+    # Track length per bin height: dz × (full bins) + dz × (partial fraction), over dz.
+    return below + part_len
