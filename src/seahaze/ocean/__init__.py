@@ -50,6 +50,7 @@ from .surface import make_surface
 from .wake import MovingVessel, ShipWaves, WakeField, transverse_wavelength, wake_foam, wake_height
 from .whitecaps import (
     FOAM_REFLECTANCE,
+    FRESH_FOAM_REFLECTANCE,
     FoamField,
     foam_fraction,
     whitecap_albedo,
@@ -59,6 +60,7 @@ from .whitecaps import (
 __all__ = [
     "BEAUFORT_SCALE",
     "FOAM_REFLECTANCE",
+    "FRESH_FOAM_REFLECTANCE",
     "BeaufortForce",
     "ChoppinessClampedWarning",
     "FFTCascade",

@@ -33,10 +33,16 @@ Foam and wakes (optional)
     (``SeaMesh.foam``): the field at its rest position where the mesh resolves the foam patches
     (weight ``w(r)·lowpass_weight(lambda_p/4, spacing)``, ``w`` the displacement fade), blended
     toward the mean coverage ``W`` elsewhere, so the far sea carries the expected foam
-    fraction of the coverage law. Given a :class:`~seahaze.ocean.wake.WakeField`, the vessels'
-    wave heights are added at the vertices' world positions (band-limited by the vertex
-    spacing, independently of the sea's fade so a calm sea shows wakes too) and their foam is
-    combined with the whitecaps as independent coverages, ``1 - (1 - f_sea)(1 - f_wake)``.
+    fraction of the coverage law. Every vertex also gets the reflectance of its foam
+    (``SeaMesh.foam_reflectance``): the field's, fresh on the most compressed crests and fading
+    toward the whitecap's edge, and Koepke's effective 0.22 where the mesh cannot resolve the
+    patches. Given a :class:`~seahaze.ocean.wake.WakeField`, the vessels' wave heights are
+    added at the vertices' world positions (band-limited by the vertex spacing, independently of
+    the sea's fade so a calm sea shows wakes too) and their foam — averaged over each vertex's
+    footprint, so a wake narrower than the far rings' spacing is neither lost between vertices
+    nor smeared over a whole ring — is combined with the whitecaps as independent coverages,
+    ``1 - (1 - f_sea)(1 - f_wake)``; wake foam is fresh (reflectance 0.55), its thinning with
+    age being in its fraction.
 
 Horizon
     A plane's horizon is at infinity; a disc of radius ``R`` leaves the rays between the
@@ -57,6 +63,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from .base import OceanSurface, lowpass_weight
+from .whitecaps import FOAM_REFLECTANCE, FRESH_FOAM_REFLECTANCE
 
 if TYPE_CHECKING:
     from .wake import WakeField
@@ -99,6 +106,8 @@ class SeaMesh:
         fade_start_m, fade_end_m: displacement fade radii (m); 0 for a flat sea.
         foam: ``(N,)`` float32 foam fraction per vertex (0–1), or ``None`` when the mesh was
             built without a foam field and without wakes.
+        foam_reflectance: ``(N,)`` float32 visible reflectance of that foam (Lambertian albedo,
+            0–1), or ``None`` with ``foam``.
     """
 
     vertices: np.ndarray
@@ -110,11 +119,24 @@ class SeaMesh:
     fade_start_m: float
     fade_end_m: float
     foam: np.ndarray | None = None
+    foam_reflectance: np.ndarray | None = None
 
     @property
     def radius_m(self) -> float:
         """Outer (circumscribed) radius of the disc (m)."""
         return float(self.ring_radii_m[-1])
+
+    @property
+    def vertex_spacing_m(self) -> np.ndarray:
+        """``(N,)`` vertex spacing (m) the displacement was band-limited with
+        (:func:`ring_spacing`; the centre vertex gets the first ring's radius)."""
+        return _vertex_spacing(self.ring_radii_m, self.n_theta)
+
+    @property
+    def vertex_fade(self) -> np.ndarray:
+        """``(N,)`` displacement fade weight of every vertex at its rest radius."""
+        r = np.concatenate([[0.0], np.repeat(self.ring_radii_m[1:], self.n_theta)])
+        return displacement_fade(r, self.fade_start_m, self.fade_end_m)
 
     def fade_weight(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Displacement weight at world positions (x, y), e.g. to scale a floating object's
@@ -226,6 +248,22 @@ def ring_spacing(radii: np.ndarray, n_theta: int) -> np.ndarray:
     return np.maximum(radial, tangential)
 
 
+def _vertex_spacing(radii: np.ndarray, n_theta: int) -> np.ndarray:
+    return np.concatenate([[radii[1]], np.repeat(ring_spacing(radii, n_theta), n_theta)])
+
+
+def _footprints(radii: np.ndarray, n_theta: int) -> tuple[np.ndarray, np.ndarray]:
+    """Radial and tangential extent (m) of every vertex's cell (the centre: the first ring)."""
+    padded = np.concatenate([radii, [2.0 * radii[-1] - radii[-2]]])
+    radial = 0.5 * (padded[2:] - padded[:-2])
+    tangential = radii[1:] * (2.0 * math.pi / n_theta)
+    first = radii[1]
+    return (
+        np.concatenate([[first], np.repeat(radial, n_theta)]),
+        np.concatenate([[first], np.repeat(tangential, n_theta)]),
+    )
+
+
 def _displace(
     surface: OceanSurface, x: np.ndarray, y: np.ndarray, spacing: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -284,8 +322,8 @@ def build_sea_mesh_data(
     y = np.concatenate([[0.0], np.outer(radii[1:], sin_t).ravel()]) + camera_xy[1]
     z = np.zeros_like(x)
 
-    spacing = np.concatenate([[radii[1]], np.repeat(ring_spacing(radii, n_theta), n_theta)])
-    foam_values = _vertex_foam(surface, foam, x, y, r, spacing, fade_start, fade_end)
+    spacing = _vertex_spacing(radii, n_theta)
+    foam_values, foam_albedo = _vertex_foam(surface, foam, x, y, r, spacing, fade_start, fade_end)
     displaced = r < fade_end
     if np.any(displaced):
         weight = displacement_fade(r[displaced], fade_start, fade_end)
@@ -295,8 +333,16 @@ def build_sea_mesh_data(
         z[displaced] = weight * dz
     if wakes is not None:
         z += wakes.height(x, y, spacing)
-        wake_foam = wakes.foam(x, y)
+        radial, tangential = _footprints(radii, n_theta)
+        wake_foam = wakes.foam_averaged(
+            x, y, np.concatenate([[0.0], np.tile(theta, len(radii) - 1)]), radial, tangential
+        )
+        # Where both overlap the wake's fresh foam lies on top of the whitecap.
+        foam_albedo = foam_albedo * (1.0 - wake_foam) + wake_foam * FRESH_FOAM_REFLECTANCE
         foam_values = 1.0 - (1.0 - foam_values) * (1.0 - wake_foam)
+    reflectance = np.where(
+        foam_values > 0.0, foam_albedo / np.maximum(foam_values, 1e-30), FOAM_REFLECTANCE
+    )
 
     vertices = np.stack([x, y, z], axis=1).astype(np.float32)
     faces = polar_grid_faces(n_theta, len(radii) - 1)
@@ -310,6 +356,9 @@ def build_sea_mesh_data(
         fade_start_m=fade_start,
         fade_end_m=fade_end,
         foam=None if foam is None and wakes is None else foam_values.astype(np.float32),
+        foam_reflectance=None
+        if foam is None and wakes is None
+        else np.clip(reflectance, 0.0, 1.0).astype(np.float32),
     )
 
 
@@ -329,20 +378,23 @@ def _vertex_foam(
     fade_start: float,
     fade_end: float,
 ) -> np.ndarray:
-    """Foam fraction per vertex from rest positions (see the module docstring)."""
+    """Foam fraction per vertex from rest positions (see the module docstring), and the foam's
+    albedo (fraction × reflectance), both blended from the resolved field toward the mean."""
     if foam is None:
-        return np.zeros_like(x0)
+        return np.zeros_like(x0), np.zeros_like(x0)
     out = np.full_like(x0, foam.mean_fraction)
+    albedo = out * FOAM_REFLECTANCE
     resolved = r < fade_end
     if not np.any(resolved) or foam.mean_fraction == 0.0:
-        return out
+        return out, albedo
     patch = FOAM_PATCH_PEAK_WAVELENGTHS * surface.peak_wavelength_m
     weight = displacement_fade(r[resolved], fade_start, fade_end) * lowpass_weight(
         patch, spacing[resolved]
     )
-    local = foam(x0[resolved], y0[resolved])
+    local, reflectance = foam.foam_and_reflectance(x0[resolved], y0[resolved])
     out[resolved] += weight * (local - foam.mean_fraction)
-    return out
+    albedo[resolved] += weight * (local * reflectance - foam.mean_fraction * FOAM_REFLECTANCE)
+    return out, albedo
 
 
 def build_sea_mesh(
