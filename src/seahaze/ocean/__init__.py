@@ -34,11 +34,13 @@ from .beaufort import (
     ocean_params_for_beaufort,
 )
 from .cox_munk import (
+    MeshRoughness,
     SlopeBudget,
     beckmann_alpha,
     cox_munk_alpha,
     cox_munk_anisotropic_alpha,
     mean_square_slope,
+    mesh_roughness,
     slope_budget,
     sub_grid_roughness,
 )
@@ -68,6 +70,7 @@ __all__ = [
     "FlatSurface",
     "FoamField",
     "GerstnerOcean",
+    "MeshRoughness",
     "MovingVessel",
     "OceanParams",
     "OceanSurface",
@@ -92,6 +95,7 @@ __all__ = [
     "invert_horizontal_displacement",
     "make_surface",
     "mean_square_slope",
+    "mesh_roughness",
     "ocean_params_for_beaufort",
     "slope_budget",
     "sub_grid_roughness",
