@@ -168,10 +168,11 @@ def test_foam_reflectance_is_fresh_on_the_crest_and_koepke_on_average(u10: float
     foam = FoamField(surface, u10)
     side = 20.0 * surface.peak_wavelength_m
     x, y = np.random.default_rng(5).uniform(3000.0, 3000.0 + side, (2, 60_000))
-    fraction, reflectance = foam.foam_and_reflectance(*invert_horizontal_displacement(surface, x, y))
-    np.testing.assert_array_equal(fraction, foam(*invert_horizontal_displacement(surface, x, y)))
+    x0, y0 = invert_horizontal_displacement(surface, x, y)
+    fraction, reflectance = foam.foam_and_reflectance(x0, y0)
+    np.testing.assert_array_equal(fraction, foam(x0, y0))
     assert reflectance.max() <= FRESH_FOAM_REFLECTANCE
-    assert reflectance[np.argmin(foam.breaking_jacobian(x, y))] > 0.5  # the freshest crest
+    assert reflectance[np.argmin(foam.breaking_jacobian(x0, y0))] > 0.5  # the freshest crest
     mean = float(np.sum(fraction * reflectance) / np.sum(fraction))
     assert mean == pytest.approx(FOAM_REFLECTANCE, rel=0.1)
     bright = np.sum(fraction[reflectance > 0.4]) / np.sum(fraction)
