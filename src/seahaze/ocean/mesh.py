@@ -391,7 +391,7 @@ def _vertex_foam(
     weight = displacement_fade(r[resolved], fade_start, fade_end) * lowpass_weight(
         patch, spacing[resolved]
     )
-    local, reflectance = foam.foam_and_reflectance(x0[resolved], y0[resolved])
+    local, reflectance = foam.foam_and_reflectance(x0[resolved], y0[resolved], spacing[resolved])
     out[resolved] += weight * (local - foam.mean_fraction)
     albedo[resolved] += weight * (local * reflectance - foam.mean_fraction * FOAM_REFLECTANCE)
     return out, albedo
