@@ -287,3 +287,29 @@ def test_mesh_keeps_the_wake_foam_area_on_coarse_cells(distance: float) -> None:
     fx, fy = np.meshgrid(np.arange(distance - 60, distance + 60, 0.5), np.arange(-400, -60, 0.5))
     exact = wakes.foam(fx, fy).sum() * 0.25
     assert np.sum(mesh.foam[region] * area[region]) == pytest.approx(exact, rel=0.05)
+
+
+def test_a_calm_sea_mesh_reaches_out_to_the_wakes() -> None:
+    """On a calm sea the displacement fades within tens of metres and the far rings are 15-40 %
+    of their radius apart: a ferry's wake 1 km away would fall between them. With wakes the
+    fine near rings reach over them (``WakeField.reach_m``), so the waves and foam are there."""
+    from seahaze.ocean import OceanParams, build_sea_mesh_data, make_surface
+
+    calm = make_surface(OceanParams(model="fft", wind_speed=1.0, fetch_km=50.0, seed=1))
+    ferry = MovingVessel(1000.0, 0.0, 90.0, FERRY.speed_m_s, 120.0, 20.0, 5.0)
+    wakes = WakeField([ferry])
+    plain = build_sea_mesh_data(calm, camera_height_m=15.0)
+    assert plain.fade_end_m < 100.0
+    mesh = build_sea_mesh_data(calm, camera_height_m=15.0, wakes=wakes)
+    assert (mesh.fade_start_m, mesh.fade_end_m) == (plain.fade_start_m, plain.fade_end_m)
+    assert wakes.reach_m((0.0, 0.0)) > 1000.0 + 60.0 + 2 * transverse_wavelength(FERRY.speed_m_s)
+    for built, fine in ((plain, False), (mesh, True)):
+        radii = built.ring_radii_m
+        j = np.searchsorted(radii, 1000.0)
+        assert (radii[j] - radii[j - 1] < 15.0) == fine  # cells finer than the beam, or not
+    x, y, z = mesh.vertices.T.astype(float)
+    behind = (np.abs(x - 1000.0) < 100.0) & (y < -100.0) & (y > -400.0)
+    assert np.abs(z[behind]).max() > 0.1
+    assert mesh.foam is not None
+    stern = (np.abs(x - 1000.0) < 8.0) & (y < -70.0) & (y > -150.0)
+    assert mesh.foam[stern].max() > 0.5

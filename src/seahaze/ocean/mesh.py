@@ -38,7 +38,8 @@ Foam and wakes (optional)
     toward the whitecap's edge, and Koepke's effective 0.22 where the mesh cannot resolve the
     patches. Given a :class:`~seahaze.ocean.wake.WakeField`, the vessels' wave heights are
     added at the vertices' world positions (band-limited by the vertex spacing, independently of
-    the sea's fade so a calm sea shows wakes too) and their foam — averaged over each vertex's
+    the sea's fade so a calm sea shows wakes too; the fine near rings then reach over the wakes,
+    :meth:`~seahaze.ocean.wake.WakeField.reach_m`) and their foam — averaged over each vertex's
     footprint, so a wake narrower than the far rings' spacing is neither lost between vertices
     nor smeared over a whole ring — is combined with the whitecaps as independent coverages,
     ``1 - (1 - f_sea)(1 - f_wake)``; wake foam is fresh (reflectance 0.55), its thinning with
@@ -308,9 +309,14 @@ def build_sea_mesh_data(
     scale = max(float(camera_height_m), MIN_NEAR_SCALE_M)
     fade_start, fade_end = fade_radii(surface, n_near, scale, radius, pixel_angle_rad)
 
+    # The fine near rings reach at least over the wakes (on a calm sea the fade radius is tens
+    # of metres, and the far rings, 15-40 % of their radius apart, would lose every wake).
+    near_end = fade_end
+    if wakes is not None and fade_end > 0.0:
+        near_end = min(max(fade_end, wakes.reach_m(camera_xy)), 0.25 * radius)
     if fade_end > 0.0:
         radii = np.concatenate(
-            [[0.0], _near_rings(n_near, fade_end, scale), _far_rings(n_far, fade_end, radius)]
+            [[0.0], _near_rings(n_near, near_end, scale), _far_rings(n_far, near_end, radius)]
         )
     else:
         radii = np.concatenate([[0.0], _near_rings(n_rings, radius, scale)])

@@ -442,6 +442,20 @@ class WakeField:
             clear *= 1.0 - waves.foam(x, y)
         return 1.0 - clear
 
+    def reach_m(self, center_xy: tuple[float, float]) -> float:
+        """Distance (m) from ``center_xy`` within which a mesh should resolve the wakes: per
+        moving vessel, its distance plus half its length and the longer of one foam e-folding
+        length and two transverse wavelengths behind the stern; 0 if none moves."""
+        reach = 0.0
+        for waves in self.waves:
+            if not waves.moving:
+                continue
+            v = waves.vessel
+            behind = max(v.speed_m_s * wake_foam_decay_s(v), 2.0 * waves.wavelength_m)
+            distance = math.hypot(v.x - center_xy[0], v.y - center_xy[1])
+            reach = max(reach, distance + 0.5 * v.length_m + behind)
+        return reach
+
     def foam_averaged(
         self,
         x: np.ndarray,
