@@ -25,7 +25,6 @@ import pytest
 from seahaze import annotate, ocean
 from seahaze.camera import Camera
 from seahaze.ocean.base import lowpass_weight
-from seahaze.ocean.mesh import FOAM_PATCH_PEAK_WAVELENGTHS
 from seahaze.sceneio import SceneFileError, load_scene
 from seahaze.spec import SceneSpec
 from seahaze.vessels import KNOT_M_S, VESSEL_CLASSES
@@ -142,7 +141,8 @@ def test_sea_geometry_carries_foam_wakes_and_the_roughness_mix() -> None:
     law = ocean.whitecap_coverage(12.0)
     assert geometry.sea_foam_coverage == pytest.approx(law)
     r = np.hypot(sea.vertices[:, 0], sea.vertices[:, 1])
-    np.testing.assert_allclose(sea.attributes[SEA_FOAM][r > 20_000.0], law, rtol=1e-5)
+    far = sea.attributes[SEA_FOAM][(r > 5_000.0) & (r < 20_000.0)]
+    assert float(np.mean(far)) == pytest.approx(law, rel=0.3)  # cells of distant whitecaps
     assert geometry.sea_roughness == pytest.approx(ocean.cox_munk_alpha(12.0))
     assert geometry.sea_roughness_near is not None
     assert geometry.sea_roughness_near < geometry.sea_roughness
@@ -247,6 +247,31 @@ def test_wake_foam_is_sea_boxes_and_instances_do_not_change() -> None:
     assert np.any(np.abs(moving.distance_m[sea] - still.distance_m[sea]) > 0.01)  # the waves
 
 
+@pytest.mark.usefixtures("mitsuba_variant")
+def test_same_seed_same_sea_and_image() -> None:
+    """Sampled vessels under way, whitecaps and wakes: the same seed gives the same geometry
+    (digest) and the same image bytes and metadata in the ``physical`` mode; another seed
+    gives another sea."""
+    from seahaze.render.engine import render_scene
+
+    spec = _spec(
+        camera={"resolution": [48, 27]},
+        vessels={"sample": {"count": 3, "distance_m": [150.0, 1500.0]}},
+        render={"mode": "physical", "spp": 2, "seed": 21},
+    )
+    camera = Camera.from_spec(spec.camera)
+    first = build_geometry(spec, camera)
+    assert any(v.speed_m_s > 0.0 for v in first.vessels)
+    assert build_geometry(spec, camera).digest() == first.digest()
+    a, b = render_scene(spec, "a"), render_scene(spec, "a")
+    assert a.clean.tobytes() == b.clean.tobytes()
+    assert a.levels[0].radiance.tobytes() == b.levels[0].radiance.tobytes()
+    assert a.meta == b.meta
+    assert [v["speed_kn"] for v in a.meta["vessels"]] == [v.speed_kn for v in first.vessels]
+    other = spec.model_copy(update={"render": spec.render.model_copy(update={"seed": 22})})
+    assert build_geometry(other, camera).digest() != first.digest()
+
+
 # ---------------------------------------------------------------- measured on rendered images
 def _fresnel(cos_i: np.ndarray, n: float = 1.333) -> np.ndarray:
     """Unpolarised Fresnel reflectance of water at incidence cosine ``cos_i``."""
@@ -346,8 +371,9 @@ def whitecap_fraction(wind: float, heading_deg: float) -> tuple[float, float, fl
     ``a = (L - L0)/(L1 - L0)`` (exact for the Lambertian blend up to the water's own small
     radiance); a pixel is whitecap where ``a`` exceeds half of Koepke's effective reflectance,
     the photographic method's threshold halfway between water and an average whitecap.
-    Pixels count by their area on the sea (``Ω d² / cos θ``), only where the mesh resolves the
-    foam patches (weight > 0.95).
+    Pixels count by their area on the sea (``Ω d² / cos θ``), only where the mesh resolves
+    whitecap patches (a quarter peak wavelength: vertex spacing below a sixteenth, displacement
+    unfaded), where the threshold is meaningful.
     """
     from seahaze.render import passes
     from seahaze.render.scene import build_scene
@@ -384,7 +410,7 @@ def whitecap_fraction(wind: float, heading_deg: float) -> tuple[float, float, fl
     geo = passes.render_geometry(loaded)  # the same geometry in all three
     lit, water, white = images
     albedo = (lit - water) / np.maximum(white - water, 1e-12)
-    # Where the mesh resolves foam patches: the field's own weight at the pixel's sea point.
+    # Where the mesh resolves whitecap patches, at the pixel's sea point.
     mesh = ocean.build_sea_mesh_data(geometry.surface, camera_height_m=60.0, quality="medium")
     d = geo.directions.astype(float)
     with np.errstate(invalid="ignore"):
@@ -392,7 +418,7 @@ def whitecap_fraction(wind: float, heading_deg: float) -> tuple[float, float, fl
     r = np.hypot(ground[..., 0], ground[..., 1])
     radii = mesh.ring_radii_m[1:]
     spacing = np.interp(r, radii, mesh.vertex_spacing_m[1 :: mesh.n_theta])
-    patch = FOAM_PATCH_PEAK_WAVELENGTHS * geometry.surface.peak_wavelength_m
+    patch = 0.25 * geometry.surface.peak_wavelength_m  # whitecap patches: a quarter wavelength
     weight = lowpass_weight(patch, spacing) * np.interp(
         r, radii, mesh.vertex_fade[1 :: mesh.n_theta]
     )

@@ -30,13 +30,15 @@ Displacement fade
 
 Foam and wakes (optional)
     Given a :class:`~seahaze.ocean.whitecaps.FoamField`, every vertex gets a foam fraction
-    (``SeaMesh.foam``): the field at its rest position where the mesh resolves the foam patches
-    (weight ``w(r)·lowpass_weight(lambda_p/4, spacing)``, ``w`` the displacement fade), blended
-    toward the mean coverage ``W`` elsewhere, so the far sea carries the expected foam
-    fraction of the coverage law. Every vertex also gets the reflectance of its foam
-    (``SeaMesh.foam_reflectance``): the field's, fresh on the most compressed crests and fading
-    toward the whitecap's edge, and Koepke's effective 0.22 where the mesh cannot resolve the
-    patches. Given a :class:`~seahaze.ocean.wake.WakeField`, the vessels' wave heights are
+    (``SeaMesh.foam``): the mean of the field over the vertex's cell in rest coordinates (its
+    radial × tangential spacing; one sample where the cell is finer than ``lambda_p/16``, up to
+    4 × 4 where it is coarser), with the detail the vertex spacing carries. Near the camera
+    that is the whitecap pattern itself; far away, where a cell holds several whitecaps or
+    none, it is their local coverage, so the far sea keeps distant whitecaps as brighter cells
+    and its mean is the coverage law's ``W``. Every vertex also gets the reflectance of its foam
+    (``SeaMesh.foam_reflectance``, from the cell's mean foam albedo): fresh on the most
+    compressed crests and fading toward the whitecap's edge, Koepke's effective 0.22 on
+    average. Given a :class:`~seahaze.ocean.wake.WakeField`, the vessels' wave heights are
     added at the vertices' world positions (band-limited by the vertex spacing, independently of
     the sea's fade so a calm sea shows wakes too; the fine near rings then reach over the wakes,
     :meth:`~seahaze.ocean.wake.WakeField.reach_m`) and their foam — averaged over each vertex's
@@ -63,7 +65,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from .base import OceanSurface, lowpass_weight
+from .base import OceanSurface
 from .whitecaps import FOAM_REFLECTANCE, FRESH_FOAM_REFLECTANCE
 
 if TYPE_CHECKING:
@@ -329,7 +331,11 @@ def build_sea_mesh_data(
     z = np.zeros_like(x)
 
     spacing = _vertex_spacing(radii, n_theta)
-    foam_values, foam_albedo = _vertex_foam(surface, foam, x, y, r, spacing, fade_start, fade_end)
+    radial, tangential = _footprints(radii, n_theta)
+    azimuth = np.concatenate([[0.0], np.tile(theta, len(radii) - 1)])
+    foam_values, foam_albedo = _vertex_foam(
+        surface, foam, x, y, azimuth, radial, tangential, spacing
+    )
     displaced = r < fade_end
     if np.any(displaced):
         weight = displacement_fade(r[displaced], fade_start, fade_end)
@@ -339,10 +345,7 @@ def build_sea_mesh_data(
         z[displaced] = weight * dz
     if wakes is not None:
         z += wakes.height(x, y, spacing)
-        radial, tangential = _footprints(radii, n_theta)
-        wake_foam = wakes.foam_averaged(
-            x, y, np.concatenate([[0.0], np.tile(theta, len(radii) - 1)]), radial, tangential
-        )
+        wake_foam = wakes.foam_averaged(x, y, azimuth, radial, tangential)
         # Where both overlap the wake's fresh foam lies on top of the whitecap.
         foam_albedo = foam_albedo * (1.0 - wake_foam) + wake_foam * FRESH_FOAM_REFLECTANCE
         foam_values = 1.0 - (1.0 - foam_values) * (1.0 - wake_foam)
@@ -368,10 +371,12 @@ def build_sea_mesh_data(
     )
 
 
-FOAM_PATCH_PEAK_WAVELENGTHS = 0.25
-"""Size of a whitecap patch in peak wavelengths, for the foam band limit: the field is used
-where the vertex spacing resolves features of this size (4 spacings), the mean coverage where
-it cannot (2 spacings)."""
+FOAM_FEATURE_PEAK_WAVELENGTHS = 1.0 / 16.0
+"""Smallest feature of the whitecap pattern a mesh cell must sample, in peak wavelengths (the
+largest FFT patch's grid is ``lambda_p/32``)."""
+
+MAX_FOAM_CELL_SAMPLES = 4
+"""Most samples per axis when a vertex's cell is averaged over the whitecap pattern."""
 
 
 def _vertex_foam(
@@ -379,28 +384,35 @@ def _vertex_foam(
     foam: FoamField | None,
     x0: np.ndarray,
     y0: np.ndarray,
-    r: np.ndarray,
+    azimuth: np.ndarray,
+    radial: np.ndarray,
+    tangential: np.ndarray,
     spacing: np.ndarray,
-    fade_start: float,
-    fade_end: float,
-) -> np.ndarray:
-    """Foam fraction per vertex from rest positions (see the module docstring), and the foam's
-    albedo (fraction × reflectance), both blended from the resolved field toward the mean."""
-    if foam is None:
+) -> tuple[np.ndarray, np.ndarray]:
+    """Foam fraction per vertex and the foam's albedo (fraction × reflectance): their means over
+    the vertex's cell (radial × tangential, at rest positions), see the module docstring."""
+    if foam is None or foam.mean_fraction == 0.0:
         return np.zeros_like(x0), np.zeros_like(x0)
-    out = np.full_like(x0, foam.mean_fraction)
-    albedo = out * FOAM_REFLECTANCE
-    resolved = r < fade_end
-    if not np.any(resolved) or foam.mean_fraction == 0.0:
-        return out, albedo
-    patch = FOAM_PATCH_PEAK_WAVELENGTHS * surface.peak_wavelength_m
-    weight = displacement_fade(r[resolved], fade_start, fade_end) * lowpass_weight(
-        patch, spacing[resolved]
-    )
-    local, reflectance = foam.foam_and_reflectance(x0[resolved], y0[resolved], spacing[resolved])
-    out[resolved] += weight * (local - foam.mean_fraction)
-    albedo[resolved] += weight * (local * reflectance - foam.mean_fraction * FOAM_REFLECTANCE)
-    return out, albedo
+    if math.isinf(foam.jacobian_threshold):  # a surface that cannot place foam: the mean
+        return np.full_like(x0, foam.mean_fraction), np.full_like(x0, foam.albedo)
+    feature = FOAM_FEATURE_PEAK_WAVELENGTHS * surface.peak_wavelength_m
+    cell = np.maximum(radial, tangential)
+    n = np.clip(np.ceil(cell / feature), 1, MAX_FOAM_CELL_SAMPLES).astype(int)
+    fraction = np.empty_like(x0)
+    albedo = np.empty_like(x0)
+    for count in np.unique(n):
+        pick = np.nonzero(n == count)[0]
+        offsets = (np.arange(count) + 0.5) / count - 0.5
+        a, b = (o.ravel() for o in np.meshgrid(offsets, offsets))
+        c, s = np.cos(azimuth[pick])[:, None], np.sin(azimuth[pick])[:, None]
+        along = radial[pick][:, None] * a[None, :]
+        across = tangential[pick][:, None] * b[None, :]
+        sx = x0[pick][:, None] + along * c - across * s
+        sy = y0[pick][:, None] + along * s + across * c
+        f, reflectance = foam.foam_and_reflectance(sx, sy, spacing[pick][:, None])
+        fraction[pick] = f.mean(axis=1)
+        albedo[pick] = (f * reflectance).mean(axis=1)
+    return fraction, albedo
 
 
 def build_sea_mesh(

@@ -233,6 +233,11 @@ class FoamField:
         return self.coverage
 
     @property
+    def albedo(self) -> float:
+        """Mean foam albedo of a large area, ``W·R_eff`` (:func:`whitecap_albedo`)."""
+        return self.coverage * FOAM_REFLECTANCE
+
+    @property
     def jacobian_threshold(self) -> float:
         """Indicator value (full detail) below which more than half of a point is foam
         (``q = W``)."""
