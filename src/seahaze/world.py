@@ -173,8 +173,8 @@ def build_sea(
     Otherwise the slope budget of every vertex — Cox–Munk's total less what the vertex's
     band-limited, faded displacement resolves — as a mix of a near lobe (the sub-grid slopes
     at the finest spacing) and a far lobe (all slopes, the flat far sea):
-    :func:`seahaze.ocean.mesh_roughness`. Foam: ``FoamField`` on the crests where the mesh
-    resolves breaking, the coverage law's mean beyond (none on a flat sea or with
+    :func:`seahaze.ocean.mesh_roughness`. Foam: ``FoamField`` on the breaking crests, each
+    vertex holding the whitecaps of its cell (none on a flat sea or with
     ``sea.whitecaps: false``), plus the wakes' foam.
     """
     params = ocean_params(spec)

@@ -65,7 +65,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from .base import OceanSurface
+from .base import OceanSurface, cell_samples
 from .whitecaps import FOAM_REFLECTANCE, FRESH_FOAM_REFLECTANCE
 
 if TYPE_CHECKING:
@@ -402,13 +402,9 @@ def _vertex_foam(
     albedo = np.empty_like(x0)
     for count in np.unique(n):
         pick = np.nonzero(n == count)[0]
-        offsets = (np.arange(count) + 0.5) / count - 0.5
-        a, b = (o.ravel() for o in np.meshgrid(offsets, offsets))
-        c, s = np.cos(azimuth[pick])[:, None], np.sin(azimuth[pick])[:, None]
-        along = radial[pick][:, None] * a[None, :]
-        across = tangential[pick][:, None] * b[None, :]
-        sx = x0[pick][:, None] + along * c - across * s
-        sy = y0[pick][:, None] + along * s + across * c
+        sx, sy = cell_samples(
+            x0[pick], y0[pick], azimuth[pick], radial[pick], tangential[pick], int(count)
+        )
         f, reflectance = foam.foam_and_reflectance(sx, sy, spacing[pick][:, None])
         fraction[pick] = f.mean(axis=1)
         albedo[pick] = (f * reflectance).mean(axis=1)

@@ -66,7 +66,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import fft as sfft
 
-from .base import lowpass_weight
+from .base import cell_samples, lowpass_weight
 from .spectra import GRAVITY
 
 KNOT_M_S = 1852.0 / 3600.0
@@ -397,13 +397,9 @@ class ShipWaves:
         n = np.clip(np.ceil(cell[index] / self.foam_feature_m), 1, MAX_FOAM_SAMPLES).astype(int)
         for count in np.unique(n):
             pick = index[n == count]
-            offsets = (np.arange(count) + 0.5) / count - 0.5
-            a, b = (o.ravel() for o in np.meshgrid(offsets, offsets))
-            c, s = np.cos(azimuth_rad[pick])[:, None], np.sin(azimuth_rad[pick])[:, None]
-            along = radial_m[pick][:, None] * a[None, :]
-            across = tangential_m[pick][:, None] * b[None, :]
-            sx = x[pick][:, None] + along * c - across * s
-            sy = y[pick][:, None] + along * s + across * c
+            sx, sy = cell_samples(
+                x[pick], y[pick], azimuth_rad[pick], radial_m[pick], tangential_m[pick], int(count)
+            )
             out[pick] = self.foam(sx, sy).mean(axis=1)
         return out
 
