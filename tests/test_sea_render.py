@@ -441,7 +441,7 @@ def test_rendered_whitecap_fraction_follows_the_coverage_law(wind: float) -> Non
     """The whitecap fraction measured on rendered images — two opposite headings, about two
     periods of the foam field — is within a factor of 2 of W = 3.84e-6 U^3.41 (Monahan &
     O'Muircheartaigh 1980) as the image's mean foam albedo over Koepke's effective 0.22 (the
-    pair W·R_eff is what the law and the reflectance mean for an image; measured 0.90–0.97 W).
+    pair W·R_eff is what the law and the reflectance mean for an image; measured 0.89–0.96 W).
     The bright cores alone (foam albedo above half of 0.22, a photographic threshold) are a
     part of it (measured 0.38–0.45 W: the fresh foam is smaller than a mesh cell)."""
     law = ocean.whitecap_coverage(wind)
