@@ -102,3 +102,35 @@ def test_sub_grid_roughness_subtracts_resolved_slopes() -> None:
     surface = make_surface(ocean_params_for_beaufort(5, seed=0))
     expected = math.sqrt(total - surface.mean_square_slope)
     assert sub_grid_roughness(10.0, surface) == pytest.approx(expected)
+
+
+@pytest.mark.parametrize("wind", [3.0, 8.0, 15.0])
+def test_mesh_roughness_gives_every_vertex_its_slope_budget(wind: float) -> None:
+    """Two Beckmann lobes mixed per vertex carry exactly the microfacet slope variance each
+    vertex's budget leaves: Cox–Munk's total less what its band-limited, faded displacement
+    resolves (``slope_budget`` at its spacing, times the fade squared). The near lobe is the
+    budget at the finest spacing, the far lobe Cox–Munk's full alpha, and the flat far sea
+    gets the far lobe alone."""
+    from seahaze.ocean import (
+        OceanParams,
+        build_sea_mesh_data,
+        cox_munk_alpha,
+        make_surface,
+        mesh_roughness,
+        slope_budget,
+    )
+
+    surface = make_surface(OceanParams(model="fft", wind_speed=wind, fetch_km=50.0, seed=2))
+    mesh = build_sea_mesh_data(surface, camera_height_m=12.0, quality="low")
+    spacing, fade = mesh.vertex_spacing_m, mesh.vertex_fade
+    mix = mesh_roughness(wind, surface, spacing, fade)
+    assert mix.alpha_far == pytest.approx(cox_munk_alpha(wind))
+    assert mix.alpha_near == pytest.approx(slope_budget(wind, surface, spacing.min()).alpha)
+    assert mix.alpha_near < mix.alpha_far
+    rng = np.random.default_rng(4)
+    for i in rng.choice(np.nonzero(fade > 0.0)[0], 40, replace=False):
+        budget = slope_budget(wind, surface, float(spacing[i]))
+        expected = budget.total - fade[i] ** 2 * budget.resolved
+        assert mix.sub_grid_mean_square_slope()[i] == pytest.approx(expected, rel=0.02)
+    np.testing.assert_array_equal(mix.near_weight[fade == 0.0], 0.0)
+    assert mix.near_weight.max() == pytest.approx(1.0)

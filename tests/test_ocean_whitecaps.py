@@ -126,7 +126,9 @@ def test_flat_sea_and_calm_wind_have_no_foam() -> None:
 
 def test_sea_mesh_carries_per_vertex_foam() -> None:
     """``build_sea_mesh_data(..., foam=...)`` adds a foam fraction per vertex without moving a
-    vertex; far from the camera it is the mean coverage; ``build_sea_mesh`` is unchanged."""
+    vertex; far from the camera, where a vertex's cell holds several whitecaps or none, it is
+    their local coverage: it varies from cell to cell and its area mean is the law's;
+    ``build_sea_mesh`` is unchanged."""
     from seahaze.ocean import build_sea_mesh, build_sea_mesh_data
 
     surface = _surface("fft", 15.0)
@@ -142,8 +144,67 @@ def test_sea_mesh_carries_per_vertex_foam() -> None:
     assert mesh.foam.dtype == np.float32
     assert mesh.foam.min() >= 0.0 and mesh.foam.max() <= 1.0
     r = np.hypot(mesh.vertices[:, 0], mesh.vertices[:, 1])
+    radii = mesh.ring_radii_m
+    padded = np.append(radii, 2 * radii[-1] - radii[-2])
+    cell = 0.5 * (padded[2:] - padded[:-2]) * radii[1:] * 2 * np.pi / mesh.n_theta
+    area = np.concatenate([[0.0], np.repeat(cell, mesh.n_theta)])
     far = r > mesh.fade_end_m
-    np.testing.assert_allclose(mesh.foam[far], whitecap_coverage(15.0), rtol=1e-6)
+    far_mean = np.sum(mesh.foam[far] * area[far]) / np.sum(area[far])
+    assert far_mean == pytest.approx(whitecap_coverage(15.0), rel=0.25)
+    assert mesh.foam[far].std() > 0.2 * whitecap_coverage(15.0)  # cells with whitecaps, without
     near = r < 0.5 * mesh.fade_start_m
     assert mesh.foam[near].max() > 0.9  # resolved whitecaps near the camera
     assert 0.3 * whitecap_coverage(15.0) < np.mean(mesh.foam[near] > 0.5) < 3.0 * 0.0393
+
+
+@pytest.mark.parametrize("u10", [8.0, 15.0])
+def test_foam_reflectance_is_fresh_on_the_crest_and_koepke_on_average(u10: float) -> None:
+    """Inside the whitecaps the reflectance falls from fresh foam (0.55) on the most compressed
+    crest toward the edge, and its foam-weighted world-area mean is Koepke's effective 0.22;
+    the decay constant solves that condition (checked here with an independent quadrature)."""
+    from scipy.integrate import quad
+
+    from seahaze.ocean.whitecaps import FOAM_AGE_DECAY
+
+    def profile(u: float) -> float:  # foam fraction against q/W: 1, then a smoothstep to 0
+        t = min(max(u - 0.5, 0.0), 1.0)
+        return 1.0 - t * t * (3.0 - 2.0 * t)
+
+    num = quad(lambda u: profile(u) * math.exp(-FOAM_AGE_DECAY * u), 0.0, 1.5, points=[0.5])[0]
+    assert num / quad(profile, 0.0, 1.5, points=[0.5])[0] == pytest.approx(0.4, abs=1e-6)
+    surface = _surface("fft", u10, time_s=23.0)
+    foam = FoamField(surface, u10)
+    side = 20.0 * surface.peak_wavelength_m
+    x, y = np.random.default_rng(5).uniform(3000.0, 3000.0 + side, (2, 60_000))
+    x0, y0 = invert_horizontal_displacement(surface, x, y)
+    fraction, reflectance = foam.foam_and_reflectance(x0, y0)
+    np.testing.assert_array_equal(fraction, foam(x0, y0))
+    assert reflectance.max() <= FRESH_FOAM_REFLECTANCE
+    assert reflectance[np.argmin(foam.breaking_jacobian(x0, y0))] > 0.5  # the freshest crest
+    mean = float(np.sum(fraction * reflectance) / np.sum(fraction))
+    assert mean == pytest.approx(FOAM_REFLECTANCE, rel=0.1)
+    bright = np.sum(fraction[reflectance > 0.4]) / np.sum(fraction)
+    assert 0.05 < bright < 0.3  # white cores, grey skirts
+
+
+def test_sea_mesh_carries_the_foam_reflectance() -> None:
+    """Per vertex: the field's reflectance where the mesh resolves whitecaps, Koepke's 0.22 on
+    average in the far field, and the sea's mean foam albedo W·R_eff is kept."""
+    from seahaze.ocean import build_sea_mesh_data
+
+    surface = _surface("fft", 15.0)
+    mesh = build_sea_mesh_data(
+        surface, camera_height_m=10.0, quality="low", foam=FoamField(surface, 15.0)
+    )
+    assert mesh.foam is not None and mesh.foam_reflectance is not None
+    assert mesh.foam_reflectance.dtype == np.float32
+    r = np.hypot(mesh.vertices[:, 0], mesh.vertices[:, 1])
+    far = r > mesh.fade_end_m
+    far_albedo = np.sum(mesh.foam[far] * mesh.foam_reflectance[far])
+    assert far_albedo / np.sum(mesh.foam[far]) == pytest.approx(FOAM_REFLECTANCE, rel=0.2)
+    near = r < 0.5 * mesh.fade_start_m
+    foamy = near & (mesh.foam > 0.5)
+    assert mesh.foam_reflectance[foamy].max() > 0.45
+    assert mesh.foam_reflectance[foamy].min() < 0.2
+    albedo = mesh.foam[near] * mesh.foam_reflectance[near]
+    assert float(np.mean(albedo)) == pytest.approx(whitecap_albedo(15.0), rel=0.5)

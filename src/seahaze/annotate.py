@@ -56,8 +56,9 @@ def vessel_meta(
     footprint_px: np.ndarray,
     level_contrasts: LevelContrasts,
 ) -> list[dict[str, Any]]:
-    """The ``vessels`` list of a scene's metadata: pose, size, box, visibility, and per level the
-    apparent contrast and whether the vessel lies beyond the visibility."""
+    """The ``vessels`` list of a scene's metadata: pose, speed through the water, size, box,
+    visibility, and per level the apparent contrast and whether the vessel lies beyond the
+    visibility."""
     by_vessel = {b.vessel: b for b in boxes}
     out = []
     for v in geometry.vessels:
@@ -71,6 +72,8 @@ def vessel_meta(
                 "class_id": v.class_id,
                 "position_m": [p.x, p.y, v.waterline_z],
                 "heading_deg": p.heading_deg,
+                "speed_m_s": v.speed_m_s,
+                "speed_kn": v.speed_kn,
                 "length_m": v.length_m,
                 "beam_m": v.beam_m,
                 "air_draft_m": v.air_draft_m,

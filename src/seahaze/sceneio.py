@@ -221,7 +221,7 @@ def parse_scene_text(
 
 def _check_vessel_classes(spec: SceneSpec, file: str, lines: dict[Loc, int]) -> list[Problem]:
     """Vessel classes are checked against the library, which the schema cannot know."""
-    from .vessels import CLASS_NAMES, length_problem
+    from .vessels import CLASS_NAMES, length_problem, speed_problem
 
     allowed = ", ".join(CLASS_NAMES)
     problems = []
@@ -240,6 +240,10 @@ def _check_vessel_classes(spec: SceneSpec, file: str, lines: dict[Loc, int]) -> 
         problem = None if vessel.length_m is None else length_problem(vessel.kind, vessel.length_m)
         if problem is not None:
             loc = ("vessels", "placed", i, "length_m")
+            problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), problem))
+        problem = None if vessel.speed_kn is None else speed_problem(vessel.kind, vessel.speed_kn)
+        if problem is not None:
+            loc = ("vessels", "placed", i, "speed_kn")
             problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), problem))
     sampler = spec.vessels.sample
     for kind in (sampler.classes or {}) if sampler else {}:

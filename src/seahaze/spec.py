@@ -223,8 +223,14 @@ class SeaSpec(_Spec):
         None,
         ge=0.001,
         le=1.0,
-        description="Microfacet roughness (alpha); default from the wind by Cox–Munk.",
+        description="Microfacet roughness (alpha) of the whole sea; default from the wind by "
+        "Cox–Munk, less the slopes the mesh resolves near the camera (docs/ocean.md).",
         json_schema_extra=_unit("1"),
+    )
+    whitecaps: bool = Field(
+        True,
+        description="Whitecaps on the breaking crests, covering the fraction of the sea the "
+        "wind's coverage law gives (3.9 % at 15 m/s; none on a `flat` sea).",
     )
 
 
@@ -314,6 +320,15 @@ class PlacedVessel(_Spec):
     mesh: UserMeshSpec | None = Field(
         None, description="A user mesh file instead of the procedural model of the class."
     )
+    speed_kn: float | None = Field(
+        None,
+        ge=0.0,
+        le=40.0,
+        description="Speed through the water, at most the top of the class's service-speed "
+        "range (docs/ocean.md); a moving vessel has a wake. Default 0: stopped, moored or "
+        "drifting (sampled vessels get speeds drawn in their class's range).",
+        json_schema_extra=_unit("kn"),
+    )
 
     @model_validator(mode="after")
     def _one_length(self) -> PlacedVessel:
@@ -325,7 +340,8 @@ class PlacedVessel(_Spec):
 
 
 class VesselSampler(_Spec):
-    """Vessels drawn at random along the view depth."""
+    """Vessels drawn at random along the view depth, each at a speed drawn in its class's
+    service-speed range (buoys moored)."""
 
     count: int = Field(5, ge=0, le=100, description="Number of vessels.")
     classes: dict[str, Annotated[float, Field(gt=0.0)]] | None = Field(
@@ -385,6 +401,11 @@ class VesselsSpec(_Spec):
         False,
         description="Pitch and roll every vessel to the sea slope across its length and beam "
         "(a long ship bridges short waves); default upright, heaving only.",
+    )
+    wakes: bool = Field(
+        True,
+        description="Moving vessels make their Kelvin waves, bow wave and white foam wake in "
+        "the sea.",
     )
 
 

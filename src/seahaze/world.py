@@ -6,12 +6,20 @@ azimuths and headings counter-clockwise from +x seen from above. Seeds for the s
 derive from ``render.seed`` (:mod:`seahaze.seeds`) unless the spec gives its own, so one master
 seed reproduces a whole scene. Explicit vessels with a ``mesh`` are loaded from the user's file
 (``sceneio`` has already resolved and checked the path of a scene file).
+
+The sea mesh carries per-vertex attributes for the renderer (``MeshData.attributes``): the
+whitecap and wake foam fraction and its reflectance, and the weight of the near-field roughness
+lobe (docs/ocean.md, "Rendering the sea"). Explicit vessels move at their ``speed_kn`` (default
+0); sampled vessels' speeds are drawn from the layout seed's own sub-stream
+(:func:`vessel_speeds`), so adding them shifted no layout.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -19,6 +27,15 @@ from . import ocean, vessels
 from .camera import Camera
 from .seeds import Stream, stream_rng, stream_seed
 from .spec import SceneSpec
+
+SPEED_SUBSTREAM = 1
+"""Sub-stream of a layout seed that draws the vessels' speeds: ``SeedSequence([layout seed,
+SPEED_SUBSTREAM])``. Fixed forever, like the streams of :mod:`seahaze.seeds`."""
+
+SEA_FOAM = "foam"
+SEA_FOAM_REFLECTANCE = "foam_reflectance"
+SEA_NEAR_ROUGHNESS = "near_roughness"
+"""Names of the sea mesh's per-vertex attributes (``MeshData.attributes``)."""
 
 
 def sun_direction(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
@@ -36,6 +53,9 @@ class MeshData:
     faces: np.ndarray
     rgb: tuple[float, float, float] = (0.5, 0.5, 0.5)
     roughness: float = 0.5
+    attributes: dict[str, np.ndarray] = field(default_factory=dict)
+    """Per-vertex float32 ``(N,)`` attributes for the renderer (the sea's :data:`SEA_FOAM`,
+    :data:`SEA_FOAM_REFLECTANCE`, :data:`SEA_NEAR_ROUGHNESS`)."""
 
 
 @dataclass
@@ -51,6 +71,15 @@ class VesselInstance:
     air_draft_m: float
     waterline_z: float
     parts: list[MeshData] = field(default_factory=list)
+    speed_m_s: float = 0.0
+    """Speed through the water (m/s); a moving vessel makes waves and a foam wake."""
+    hull_draft_m: float = 0.0
+    """Draft of the displacing hull body (m), for the vessel's waves."""
+
+    @property
+    def speed_kn(self) -> float:
+        """:attr:`speed_m_s` in knots."""
+        return self.speed_m_s / vessels.KNOT_M_S
 
 
 @dataclass
@@ -59,8 +88,16 @@ class SceneGeometry:
 
     sea: MeshData
     sea_roughness: float
+    """Beckmann ``alpha`` of a flat sea with all of the wind's slopes (Cox–Munk, or the
+    spec's ``sea.roughness``): the far sea's, and what a flat-sea model of this sea uses."""
     surface: ocean.OceanSurface
     vessels: list[VesselInstance]
+    sea_roughness_near: float | None = None
+    """Beckmann ``alpha`` where the mesh resolves its waves (the sub-grid slopes only); None
+    when the whole sea has :attr:`sea_roughness` (flat sea, or ``sea.roughness`` given)."""
+    sea_foam_coverage: float = 0.0
+    """Mean foam fraction of the sea surface (0–1): the whitecap coverage ``W`` of the wind
+    (0 without whitecaps). Its mean reflectance is :data:`ocean.FOAM_REFLECTANCE`."""
 
     def digest(self) -> str:
         """SHA-256 of every mesh and material: two worlds with the same digest render the same
@@ -74,7 +111,11 @@ class SceneGeometry:
             h.update(np.ascontiguousarray(mesh.vertices, np.float32).tobytes())
             h.update(np.ascontiguousarray(mesh.faces, np.uint32).tobytes())
             h.update(np.asarray([*mesh.rgb, mesh.roughness], np.float64).tobytes())
-        h.update(np.float64(self.sea_roughness).tobytes())
+            for key in sorted(mesh.attributes):
+                h.update(key.encode())
+                h.update(np.ascontiguousarray(mesh.attributes[key], np.float32).tobytes())
+        near = -1.0 if self.sea_roughness_near is None else self.sea_roughness_near
+        h.update(np.asarray([self.sea_roughness, near, self.sea_foam_coverage]).tobytes())
         return h.hexdigest()
 
 
@@ -94,21 +135,118 @@ def ocean_params(spec: SceneSpec) -> ocean.OceanParams:
     )
 
 
-def build_sea(spec: SceneSpec, camera: Camera) -> tuple[MeshData, float, ocean.OceanSurface]:
-    """The sea mesh to the horizon, its microfacet roughness and the surface for height queries."""
+@dataclass(frozen=True)
+class Sea:
+    """The sea of a scene: its mesh (with per-vertex foam and roughness mix), the roughness of
+    its two lobes, its foam coverage and the surface for height queries.
+
+    Unpacks (and indexes) as the ``(mesh, roughness, surface)`` triple of older callers.
+    """
+
+    mesh: MeshData
+    roughness: float
+    """Far-sea (flat-sea) Beckmann ``alpha``: :attr:`SceneGeometry.sea_roughness`."""
+    surface: ocean.OceanSurface
+    roughness_near: float | None = None
+    foam_coverage: float = 0.0
+
+    def _triple(self) -> tuple[MeshData, float, ocean.OceanSurface]:
+        return self.mesh, self.roughness, self.surface
+
+    def __iter__(self) -> Iterator[Any]:
+        return iter(self._triple())
+
+    def __getitem__(self, index: int) -> Any:
+        return self._triple()[index]
+
+
+def build_sea(
+    spec: SceneSpec,
+    camera: Camera,
+    moving: Sequence[ocean.MovingVessel] = (),
+    surface: ocean.OceanSurface | None = None,
+) -> Sea:
+    """The sea mesh to the horizon with its whitecaps and the waves and wakes of ``moving``
+    vessels, its roughness and the surface for height queries (``surface``: reuse one).
+
+    Roughness (docs/ocean.md): with ``sea.roughness`` given, that ``alpha`` everywhere.
+    Otherwise the slope budget of every vertex — Cox–Munk's total less what the vertex's
+    band-limited, faded displacement resolves — as a mix of a near lobe (the sub-grid slopes
+    at the finest spacing) and a far lobe (all slopes, the flat far sea):
+    :func:`seahaze.ocean.mesh_roughness`. Foam: ``FoamField`` on the breaking crests, each
+    vertex holding the whitecaps of its cell (none on a flat sea or with
+    ``sea.whitecaps: false``), plus the wakes' foam.
+    """
     params = ocean_params(spec)
-    surface = ocean.make_surface(params)
-    vertices, faces = ocean.build_sea_mesh(
-        surface, camera_height_m=camera.height_m, quality=spec.sea.quality
-    )[:2]
-    # Full Cox–Munk roughness: most of the frame is the far sea, where the mesh is faded flat and
-    # every wave is sub-grid; near the camera this counts the resolved waves twice (slightly rough).
-    roughness = (
-        spec.sea.roughness
-        if spec.sea.roughness is not None
-        else ocean.cox_munk_alpha(params.wind_speed)
+    surface = ocean.make_surface(params) if surface is None else surface
+    flat = isinstance(surface, ocean.FlatSurface)
+    foam = ocean.FoamField(surface, params.wind_speed) if spec.sea.whitecaps and not flat else None
+    wakes = ocean.WakeField(moving) if moving else None
+    mesh = ocean.build_sea_mesh_data(
+        surface, camera_height_m=camera.height_m, quality=spec.sea.quality, foam=foam, wakes=wakes
     )
-    return MeshData("sea", vertices, faces, spec.sea.water_color, roughness), roughness, surface
+    attributes: dict[str, np.ndarray] = {}
+    if mesh.foam is not None and mesh.foam_reflectance is not None and mesh.foam.max() > 0.0:
+        attributes[SEA_FOAM] = mesh.foam
+        attributes[SEA_FOAM_REFLECTANCE] = mesh.foam_reflectance
+    near: float | None = None
+    if spec.sea.roughness is not None:
+        roughness = spec.sea.roughness
+    else:
+        mix = ocean.mesh_roughness(
+            params.wind_speed, surface, mesh.vertex_spacing_m, mesh.vertex_fade
+        )
+        roughness = mix.alpha_far
+        if mix.alpha_near < mix.alpha_far and mix.near_weight.max() > 0.0:
+            near = mix.alpha_near
+            attributes[SEA_NEAR_ROUGHNESS] = mix.near_weight
+    sea = MeshData("sea", mesh.vertices, mesh.faces, spec.sea.water_color, roughness, attributes)
+    coverage = foam.mean_fraction if foam is not None else 0.0
+    return Sea(sea, roughness, surface, near, coverage)
+
+
+def vessel_speeds(spec: SceneSpec, placements: Sequence[vessels.Placement]) -> list[float]:
+    """Speed through the water (m/s) of every placement (explicit vessels first).
+
+    An explicit vessel moves only if the scene says so: its ``speed_kn``, default 0 (stopped,
+    moored or drifting); ValueError if faster than its class allows. A sampled vessel's speed
+    is drawn uniformly in its class's service-speed range (buoys 0), one draw per vessel in
+    order from the sub-stream :data:`SPEED_SUBSTREAM` of the layout seed (the sampler's
+    ``seed`` when given), so the layout itself is unchanged by the draws.
+    """
+    n_placed = len(spec.vessels.placed)
+    sampler = spec.vessels.sample
+    layout_seed = stream_seed(spec.render.seed, Stream.LAYOUT, sampler.seed if sampler else None)
+    rng = np.random.default_rng(np.random.SeedSequence([layout_seed, SPEED_SUBSTREAM]))
+    speeds = []
+    for index, placement in enumerate(placements):
+        if index >= n_placed:
+            speeds.append(vessels.sample_speed_m_s(placement.kind, rng))
+            continue
+        given = spec.vessels.placed[index].speed_kn or 0.0
+        problem = vessels.speed_problem(placement.kind, given)
+        if problem is not None:
+            raise ValueError(f"vessels.placed[{index}].speed_kn: {problem}")
+        speeds.append(given * vessels.KNOT_M_S)
+    return speeds
+
+
+def moving_vessels(instances: Sequence[VesselInstance]) -> list[ocean.MovingVessel]:
+    """The vessels under way as the sea sees them (midships, heading, speed, hull size)."""
+    return [
+        ocean.MovingVessel(
+            v.placement.x,
+            v.placement.y,
+            v.placement.heading_deg,
+            v.speed_m_s,
+            v.length_m,
+            v.beam_m,
+            # A user mesh may sit with no draft; a tenth of the beam stands in for its hull.
+            v.hull_draft_m if v.hull_draft_m > 0.0 else 0.1 * v.beam_m,
+        )
+        for v in instances
+        if v.speed_m_s > 0.0
+    ]
 
 
 def load_user_meshes(spec: SceneSpec) -> dict[int, vessels.VesselModel]:
@@ -196,7 +334,9 @@ def build_vessels(
     user_models = load_user_meshes(spec)
     rng = stream_rng(spec.render.seed, Stream.VESSELS)
     instances = []
-    for index, placement in enumerate(layout_vessels(spec, camera, user_models)):
+    placements = layout_vessels(spec, camera, user_models)
+    speeds = vessel_speeds(spec, placements)
+    for index, placement in enumerate(placements):
         # Explicit vessels come first in the layout, so index i < len(placed) is placed[i].
         model = user_models.get(index)
         if model is None:
@@ -226,12 +366,25 @@ def build_vessels(
                 model.air_draft_m,
                 waterline,
                 meshes,
+                speeds[index],
+                model.displacing_draft_m,
             )
         )
     return instances
 
 
 def build_geometry(spec: SceneSpec, camera: Camera) -> SceneGeometry:
-    """Sea and vessels for a scene."""
-    sea, roughness, surface = build_sea(spec, camera)
-    return SceneGeometry(sea, roughness, surface, build_vessels(spec, camera, surface))
+    """Sea and vessels for a scene: the vessels first (the sea needs their wakes), floating on
+    the wave surface (their waterline ignores their own wakes)."""
+    surface = ocean.make_surface(ocean_params(spec))
+    instances = build_vessels(spec, camera, surface)
+    moving = moving_vessels(instances) if spec.vessels.wakes else []
+    sea = build_sea(spec, camera, moving, surface)
+    return SceneGeometry(
+        sea.mesh,
+        sea.roughness,
+        surface,
+        instances,
+        sea_roughness_near=sea.roughness_near,
+        sea_foam_coverage=sea.foam_coverage,
+    )

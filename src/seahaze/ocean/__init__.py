@@ -34,11 +34,13 @@ from .beaufort import (
     ocean_params_for_beaufort,
 )
 from .cox_munk import (
+    MeshRoughness,
     SlopeBudget,
     beckmann_alpha,
     cox_munk_alpha,
     cox_munk_anisotropic_alpha,
     mean_square_slope,
+    mesh_roughness,
     slope_budget,
     sub_grid_roughness,
 )
@@ -50,6 +52,7 @@ from .surface import make_surface
 from .wake import MovingVessel, ShipWaves, WakeField, transverse_wavelength, wake_foam, wake_height
 from .whitecaps import (
     FOAM_REFLECTANCE,
+    FRESH_FOAM_REFLECTANCE,
     FoamField,
     foam_fraction,
     whitecap_albedo,
@@ -59,6 +62,7 @@ from .whitecaps import (
 __all__ = [
     "BEAUFORT_SCALE",
     "FOAM_REFLECTANCE",
+    "FRESH_FOAM_REFLECTANCE",
     "BeaufortForce",
     "ChoppinessClampedWarning",
     "FFTCascade",
@@ -66,6 +70,7 @@ __all__ = [
     "FlatSurface",
     "FoamField",
     "GerstnerOcean",
+    "MeshRoughness",
     "MovingVessel",
     "OceanParams",
     "OceanSurface",
@@ -90,6 +95,7 @@ __all__ = [
     "invert_horizontal_displacement",
     "make_surface",
     "mean_square_slope",
+    "mesh_roughness",
     "ocean_params_for_beaufort",
     "slope_budget",
     "sub_grid_roughness",

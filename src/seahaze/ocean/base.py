@@ -206,6 +206,25 @@ def lowpass_weight(wavelength_m: np.ndarray, spacing_m: np.ndarray | float) -> n
     return t * t * (3.0 - 2.0 * t)
 
 
+def cell_samples(
+    x: np.ndarray,
+    y: np.ndarray,
+    azimuth_rad: np.ndarray,
+    radial_m: np.ndarray,
+    tangential_m: np.ndarray,
+    count: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``count × count`` stratified points ``(n, count²)`` in each of ``n`` cells centred on
+    (x, y) (m): ``radial_m`` long along the azimuth ``azimuth_rad`` and ``tangential_m`` across it
+    (a polar mesh vertex's footprint), for averaging a field over the cell."""
+    offsets = (np.arange(count) + 0.5) / count - 0.5
+    a, b = (o.ravel() for o in np.meshgrid(offsets, offsets))
+    c, s = np.cos(azimuth_rad)[:, None], np.sin(azimuth_rad)[:, None]
+    along = radial_m[:, None] * a[None, :]
+    across = tangential_m[:, None] * b[None, :]
+    return x[:, None] + along * c - across * s, y[:, None] + along * s + across * c
+
+
 def unit_normals_from_tangents(
     dx_dx0: np.ndarray,
     dy_dx0: np.ndarray,

@@ -43,6 +43,8 @@ import math
 from dataclasses import dataclass
 from typing import Protocol
 
+import numpy as np
+
 COX_MUNK_HEIGHT_M = 12.5
 """Anemometer height of Cox & Munk's wind speeds (m)."""
 
@@ -158,3 +160,75 @@ def slope_budget(
     resolved = max(float(surface.mean_square_slope_filtered(spacing_m)), 0.0)
     sub = max(total - resolved, floor)
     return SlopeBudget(total, resolved, sub, beckmann_alpha(sub))
+
+
+SPACING_SAMPLES = 32
+"""Vertex spacings (log-spaced) at which :func:`mesh_roughness` evaluates the resolved slope
+variance; it is interpolated in ``log(spacing)`` between them."""
+
+
+@dataclass(frozen=True)
+class MeshRoughness:
+    """The slope budget of every vertex of a sea mesh, as two Beckmann lobes and a mix.
+
+    One Mitsuba BSDF has one ``alpha``, but the mesh resolves different slopes at different
+    distances (its displacement is band-limited by the vertex spacing and faded to flat far
+    away). A blend ``(1 - n)·lobe(alpha_far) + n·lobe(alpha_near)`` of two Beckmann lobes has
+    the mean square slope ``(1 - n)·alpha_far² + n·alpha_near²`` (a mixture's second moment is
+    the weighted sum of its parts'), so the per-vertex weight
+
+        n = (sigma²_CM - sigma²_sub) / (sigma²_CM - alpha_near²),
+        sigma²_sub = max(sigma²_CM - w²·sigma²_resolved(spacing), floor)
+
+    (``w`` the displacement fade, slopes scale with it) gives every vertex exactly the
+    microfacet slope variance its own slope budget leaves: the near sea is not counted twice,
+    the flat far sea carries all of Cox–Munk. The mixture is not itself Gaussian (its kurtosis
+    is slightly higher), which matters only in the transition zone.
+
+    Attributes:
+        alpha_near: ``alpha`` of the finest, fully displaced vertices (sub-grid slopes only).
+        alpha_far: ``alpha`` of a flat sea, :func:`cox_munk_alpha` (all slopes).
+        near_weight: ``(N,)`` weight ``n`` of the near lobe per vertex, in [0, 1].
+    """
+
+    alpha_near: float
+    alpha_far: float
+    near_weight: np.ndarray
+
+    def sub_grid_mean_square_slope(self) -> np.ndarray:
+        """``(N,)`` microfacet mean square slope per vertex of the two-lobe mixture."""
+        n = self.near_weight.astype(float)
+        return n * self.alpha_near**2 + (1.0 - n) * self.alpha_far**2
+
+
+def mesh_roughness(
+    wind_speed: float,
+    surface: _ResolvesSlopes,
+    spacing_m: np.ndarray,
+    fade: np.ndarray,
+    floor: float = MIN_SUBGRID_MEAN_SQUARE_SLOPE,
+) -> MeshRoughness:
+    """The two-lobe roughness of a sea mesh (:class:`MeshRoughness`) from its vertices'
+    spacing ``spacing_m`` (m) and displacement fade weight ``fade`` (0–1), for a wind of
+    ``wind_speed`` (m/s at 10 m)."""
+    spacing = np.asarray(spacing_m, dtype=float)
+    weight = np.asarray(fade, dtype=float)
+    total = mean_square_slope(wind_speed)
+    resolved = np.zeros_like(spacing)
+    shown = weight > 0.0
+    if np.any(shown):
+        lo, hi = float(spacing[shown].min()), float(spacing[shown].max())
+        grid = np.geomspace(lo, max(hi, lo * (1.0 + 1e-9)), SPACING_SAMPLES)
+        table = np.array([max(surface.mean_square_slope_filtered(float(d)), 0.0) for d in grid])
+        resolved[shown] = weight[shown] ** 2 * np.interp(
+            np.log(spacing[shown]), np.log(grid), table
+        )
+    sub = np.maximum(total - resolved, floor)
+    near = float(min(sub.min(), total)) if sub.size else total
+    span = total - near
+    mix = (total - sub) / span if span > 0.0 else np.zeros_like(sub)
+    return MeshRoughness(
+        beckmann_alpha(near),
+        beckmann_alpha(total),
+        np.clip(mix, 0.0, 1.0).astype(np.float32),
+    )

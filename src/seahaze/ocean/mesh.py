@@ -30,13 +30,22 @@ Displacement fade
 
 Foam and wakes (optional)
     Given a :class:`~seahaze.ocean.whitecaps.FoamField`, every vertex gets a foam fraction
-    (``SeaMesh.foam``): the field at its rest position where the mesh resolves the foam patches
-    (weight ``w(r)·lowpass_weight(lambda_p/4, spacing)``, ``w`` the displacement fade), blended
-    toward the mean coverage ``W`` elsewhere, so the far sea carries the expected foam
-    fraction of the coverage law. Given a :class:`~seahaze.ocean.wake.WakeField`, the vessels'
-    wave heights are added at the vertices' world positions (band-limited by the vertex
-    spacing, independently of the sea's fade so a calm sea shows wakes too) and their foam is
-    combined with the whitecaps as independent coverages, ``1 - (1 - f_sea)(1 - f_wake)``.
+    (``SeaMesh.foam``): the mean of the field over the vertex's cell in rest coordinates (its
+    radial × tangential spacing; one sample where the cell is finer than ``lambda_p/16``, up to
+    4 × 4 where it is coarser), with the detail the vertex spacing carries. Near the camera
+    that is the whitecap pattern itself; far away, where a cell holds several whitecaps or
+    none, it is their local coverage, so the far sea keeps distant whitecaps as brighter cells
+    and its mean is the coverage law's ``W``. Every vertex also gets the reflectance of its foam
+    (``SeaMesh.foam_reflectance``, from the cell's mean foam albedo): fresh on the most
+    compressed crests and fading toward the whitecap's edge, Koepke's effective 0.22 on
+    average. Given a :class:`~seahaze.ocean.wake.WakeField`, the vessels' wave heights are
+    added at the vertices' world positions (band-limited by the vertex spacing, independently of
+    the sea's fade so a calm sea shows wakes too; the fine near rings then reach over the wakes,
+    :meth:`~seahaze.ocean.wake.WakeField.reach_m`) and their foam — averaged over each vertex's
+    footprint, so a wake narrower than the far rings' spacing is neither lost between vertices
+    nor smeared over a whole ring — is combined with the whitecaps as independent coverages,
+    ``1 - (1 - f_sea)(1 - f_wake)``; wake foam is fresh (reflectance 0.55), its thinning with
+    age being in its fraction.
 
 Horizon
     A plane's horizon is at infinity; a disc of radius ``R`` leaves the rays between the
@@ -56,7 +65,8 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from .base import OceanSurface, lowpass_weight
+from .base import OceanSurface, cell_samples
+from .whitecaps import FOAM_REFLECTANCE, FRESH_FOAM_REFLECTANCE
 
 if TYPE_CHECKING:
     from .wake import WakeField
@@ -99,6 +109,8 @@ class SeaMesh:
         fade_start_m, fade_end_m: displacement fade radii (m); 0 for a flat sea.
         foam: ``(N,)`` float32 foam fraction per vertex (0–1), or ``None`` when the mesh was
             built without a foam field and without wakes.
+        foam_reflectance: ``(N,)`` float32 visible reflectance of that foam (Lambertian albedo,
+            0–1), or ``None`` with ``foam``.
     """
 
     vertices: np.ndarray
@@ -110,11 +122,24 @@ class SeaMesh:
     fade_start_m: float
     fade_end_m: float
     foam: np.ndarray | None = None
+    foam_reflectance: np.ndarray | None = None
 
     @property
     def radius_m(self) -> float:
         """Outer (circumscribed) radius of the disc (m)."""
         return float(self.ring_radii_m[-1])
+
+    @property
+    def vertex_spacing_m(self) -> np.ndarray:
+        """``(N,)`` vertex spacing (m) the displacement was band-limited with
+        (:func:`ring_spacing`; the centre vertex gets the first ring's radius)."""
+        return _vertex_spacing(self.ring_radii_m, self.n_theta)
+
+    @property
+    def vertex_fade(self) -> np.ndarray:
+        """``(N,)`` displacement fade weight of every vertex at its rest radius."""
+        r = np.concatenate([[0.0], np.repeat(self.ring_radii_m[1:], self.n_theta)])
+        return displacement_fade(r, self.fade_start_m, self.fade_end_m)
 
     def fade_weight(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Displacement weight at world positions (x, y), e.g. to scale a floating object's
@@ -226,6 +251,22 @@ def ring_spacing(radii: np.ndarray, n_theta: int) -> np.ndarray:
     return np.maximum(radial, tangential)
 
 
+def _vertex_spacing(radii: np.ndarray, n_theta: int) -> np.ndarray:
+    return np.concatenate([[radii[1]], np.repeat(ring_spacing(radii, n_theta), n_theta)])
+
+
+def _footprints(radii: np.ndarray, n_theta: int) -> tuple[np.ndarray, np.ndarray]:
+    """Radial and tangential extent (m) of every vertex's cell (the centre: the first ring)."""
+    padded = np.concatenate([radii, [2.0 * radii[-1] - radii[-2]]])
+    radial = 0.5 * (padded[2:] - padded[:-2])
+    tangential = radii[1:] * (2.0 * math.pi / n_theta)
+    first = radii[1]
+    return (
+        np.concatenate([[first], np.repeat(radial, n_theta)]),
+        np.concatenate([[first], np.repeat(tangential, n_theta)]),
+    )
+
+
 def _displace(
     surface: OceanSurface, x: np.ndarray, y: np.ndarray, spacing: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -270,9 +311,14 @@ def build_sea_mesh_data(
     scale = max(float(camera_height_m), MIN_NEAR_SCALE_M)
     fade_start, fade_end = fade_radii(surface, n_near, scale, radius, pixel_angle_rad)
 
+    # The fine near rings reach at least over the wakes (on a calm sea the fade radius is tens
+    # of metres, and the far rings, 15-40 % of their radius apart, would lose every wake).
+    near_end = fade_end
+    if wakes is not None and fade_end > 0.0:
+        near_end = min(max(fade_end, wakes.reach_m(camera_xy)), 0.25 * radius)
     if fade_end > 0.0:
         radii = np.concatenate(
-            [[0.0], _near_rings(n_near, fade_end, scale), _far_rings(n_far, fade_end, radius)]
+            [[0.0], _near_rings(n_near, near_end, scale), _far_rings(n_far, near_end, radius)]
         )
     else:
         radii = np.concatenate([[0.0], _near_rings(n_rings, radius, scale)])
@@ -284,8 +330,12 @@ def build_sea_mesh_data(
     y = np.concatenate([[0.0], np.outer(radii[1:], sin_t).ravel()]) + camera_xy[1]
     z = np.zeros_like(x)
 
-    spacing = np.concatenate([[radii[1]], np.repeat(ring_spacing(radii, n_theta), n_theta)])
-    foam_values = _vertex_foam(surface, foam, x, y, r, spacing, fade_start, fade_end)
+    spacing = _vertex_spacing(radii, n_theta)
+    radial, tangential = _footprints(radii, n_theta)
+    azimuth = np.concatenate([[0.0], np.tile(theta, len(radii) - 1)])
+    foam_values, foam_albedo = _vertex_foam(
+        surface, foam, x, y, azimuth, radial, tangential, spacing
+    )
     displaced = r < fade_end
     if np.any(displaced):
         weight = displacement_fade(r[displaced], fade_start, fade_end)
@@ -295,8 +345,13 @@ def build_sea_mesh_data(
         z[displaced] = weight * dz
     if wakes is not None:
         z += wakes.height(x, y, spacing)
-        wake_foam = wakes.foam(x, y)
+        wake_foam = wakes.foam_averaged(x, y, azimuth, radial, tangential)
+        # Where both overlap the wake's fresh foam lies on top of the whitecap.
+        foam_albedo = foam_albedo * (1.0 - wake_foam) + wake_foam * FRESH_FOAM_REFLECTANCE
         foam_values = 1.0 - (1.0 - foam_values) * (1.0 - wake_foam)
+    reflectance = np.where(
+        foam_values > 0.0, foam_albedo / np.maximum(foam_values, 1e-30), FOAM_REFLECTANCE
+    )
 
     vertices = np.stack([x, y, z], axis=1).astype(np.float32)
     faces = polar_grid_faces(n_theta, len(radii) - 1)
@@ -310,13 +365,18 @@ def build_sea_mesh_data(
         fade_start_m=fade_start,
         fade_end_m=fade_end,
         foam=None if foam is None and wakes is None else foam_values.astype(np.float32),
+        foam_reflectance=None
+        if foam is None and wakes is None
+        else np.clip(reflectance, 0.0, 1.0).astype(np.float32),
     )
 
 
-FOAM_PATCH_PEAK_WAVELENGTHS = 0.25
-"""Size of a whitecap patch in peak wavelengths, for the foam band limit: the field is used
-where the vertex spacing resolves features of this size (4 spacings), the mean coverage where
-it cannot (2 spacings)."""
+FOAM_FEATURE_PEAK_WAVELENGTHS = 1.0 / 16.0
+"""Smallest feature of the whitecap pattern a mesh cell must sample, in peak wavelengths (the
+largest FFT patch's grid is ``lambda_p/32``)."""
+
+MAX_FOAM_CELL_SAMPLES = 4
+"""Most samples per axis when a vertex's cell is averaged over the whitecap pattern."""
 
 
 def _vertex_foam(
@@ -324,25 +384,31 @@ def _vertex_foam(
     foam: FoamField | None,
     x0: np.ndarray,
     y0: np.ndarray,
-    r: np.ndarray,
+    azimuth: np.ndarray,
+    radial: np.ndarray,
+    tangential: np.ndarray,
     spacing: np.ndarray,
-    fade_start: float,
-    fade_end: float,
-) -> np.ndarray:
-    """Foam fraction per vertex from rest positions (see the module docstring)."""
-    if foam is None:
-        return np.zeros_like(x0)
-    out = np.full_like(x0, foam.mean_fraction)
-    resolved = r < fade_end
-    if not np.any(resolved) or foam.mean_fraction == 0.0:
-        return out
-    patch = FOAM_PATCH_PEAK_WAVELENGTHS * surface.peak_wavelength_m
-    weight = displacement_fade(r[resolved], fade_start, fade_end) * lowpass_weight(
-        patch, spacing[resolved]
-    )
-    local = foam(x0[resolved], y0[resolved])
-    out[resolved] += weight * (local - foam.mean_fraction)
-    return out
+) -> tuple[np.ndarray, np.ndarray]:
+    """Foam fraction per vertex and the foam's albedo (fraction × reflectance): their means over
+    the vertex's cell (radial × tangential, at rest positions), see the module docstring."""
+    if foam is None or foam.mean_fraction == 0.0:
+        return np.zeros_like(x0), np.zeros_like(x0)
+    if math.isinf(foam.jacobian_threshold):  # a surface that cannot place foam: the mean
+        return np.full_like(x0, foam.mean_fraction), np.full_like(x0, foam.albedo)
+    feature = FOAM_FEATURE_PEAK_WAVELENGTHS * surface.peak_wavelength_m
+    cell = np.maximum(radial, tangential)
+    n = np.clip(np.ceil(cell / feature), 1, MAX_FOAM_CELL_SAMPLES).astype(int)
+    fraction = np.empty_like(x0)
+    albedo = np.empty_like(x0)
+    for count in np.unique(n):
+        pick = np.nonzero(n == count)[0]
+        sx, sy = cell_samples(
+            x0[pick], y0[pick], azimuth[pick], radial[pick], tangential[pick], int(count)
+        )
+        f, reflectance = foam.foam_and_reflectance(sx, sy, spacing[pick][:, None])
+        fraction[pick] = f.mean(axis=1)
+        albedo[pick] = (f * reflectance).mean(axis=1)
+    return fraction, albedo
 
 
 def build_sea_mesh(

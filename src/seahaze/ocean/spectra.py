@@ -1,4 +1,5 @@
-"""Wind-sea wave spectra, directional spreading and deep-water dispersion.
+"""Wind-sea wave spectra (directional spreading: :mod:`.spreading`; dispersion: :mod:`.dispersion`,
+both re-exported here).
 
 Conventions (SI throughout)
     * angular frequency ``omega`` in rad/s, wavenumber ``k`` in rad/m;
@@ -19,11 +20,6 @@ References
     * Phillips, O. M. (1958). The equilibrium range in the spectrum of wind-generated waves.
       J. Fluid Mech. 4(4), 426–434.
     * Tessendorf, J. (2001). Simulating Ocean Water. SIGGRAPH course notes.
-    * Longuet-Higgins, M. S., Cartwright, D. E. & Smith, N. D. (1963). Observations of the
-      directional spectrum of sea waves using the motions of a floating buoy.
-    * Mitsuyasu, H. et al. (1975). Observations of the directional spectrum of ocean waves using
-      a cloverleaf buoy. J. Phys. Oceanogr. 5, 750–760; Goda, Y. (2010). Random Seas and Design
-      of Maritime Structures, 3rd ed., §2.3 (``s_max = 10`` for wind waves).
     * Stewart, R. H. (2008). Introduction to Physical Oceanography, ch. 16 (eqs. 16.28–16.35:
       ``U19.5 ≈ 1.026·U10``, ``omega_p = 0.877 g/U19.5``, JONSWAP fetch laws).
 """
@@ -38,10 +34,14 @@ from typing import Literal
 
 import numpy as np
 from scipy import integrate
-from scipy.special import gammaln
 
-GRAVITY = 9.81
-"""Gravitational acceleration g (m/s²)."""
+from .dispersion import GRAVITY, deep_water_group_velocity, deep_water_omega, deep_water_wavenumber
+from .spreading import (
+    SPREADING_S_MAX,
+    cos2_spreading,
+    cos2s_spreading,
+    mitsuyasu_spreading_exponent,
+)
 
 PHILLIPS_CONSTANT = 8.1e-3
 """Phillips' equilibrium-range constant alpha (dimensionless), as fitted by Pierson & Moskowitz
@@ -68,36 +68,13 @@ JONSWAP_HS_GROWTH = 1.6e-3
 """JONSWAP fetch-limited growth of the significant wave height, ``g·Hs/U10² = 1.6e-3·chi^½``
 (from the energy law ``g²·m0/U10⁴ = 1.6e-7·chi``, Hasselmann et al. 1973)."""
 
-SPREADING_S_MAX = 10.0
-"""Default peak value of the cos-2s spreading exponent for wind waves (Goda 2010, §2.3)."""
-
 SpectrumName = Literal["jonswap", "pierson_moskowitz", "phillips"]
 SpreadingName = Literal["cos2s", "cos2"]
 ArrayLike = float | np.ndarray
 
 
 # --------------------------------------------------------------------------------------------
-# Dispersion and wind
-
-
-def deep_water_omega(k: ArrayLike, gravity: float = GRAVITY) -> np.ndarray:
-    """Angular frequency ``omega = sqrt(g·k)`` (rad/s) of a deep-water gravity wave of wavenumber
-    ``k`` (rad/m); linear (Airy) dispersion ``omega² = g·k`` (e.g. Tessendorf 2001, eq. 14)."""
-    return np.sqrt(gravity * np.abs(np.asarray(k, dtype=float)))
-
-
-def deep_water_wavenumber(omega: ArrayLike, gravity: float = GRAVITY) -> np.ndarray:
-    """Wavenumber ``k = omega²/g`` (rad/m) of a deep-water wave of angular frequency ``omega``
-    (rad/s); the inverse of :func:`deep_water_omega`."""
-    omega = np.asarray(omega, dtype=float)
-    return omega * omega / gravity
-
-
-def deep_water_group_velocity(omega: ArrayLike, gravity: float = GRAVITY) -> np.ndarray:
-    """Group velocity ``d omega/dk = g/(2·omega)`` (m/s) of deep-water waves; also the Jacobian
-    that converts a frequency spectrum into a wavenumber spectrum,
-    ``F(k) = S(omega)·d omega/dk``."""
-    return gravity / (2.0 * np.asarray(omega, dtype=float))
+# Wind
 
 
 def wind_speed_19_5_from_10(u10: float) -> float:
@@ -375,48 +352,6 @@ def _power_law_with_cutoff(omega: np.ndarray, scale: float, cutoff: float) -> np
     w = omega[positive]
     out[positive] = scale / w**5 * np.exp(-cutoff / w**4)
     return out
-
-
-# --------------------------------------------------------------------------------------------
-# Directional spreading
-
-
-def cos2s_normalisation(s: ArrayLike) -> np.ndarray:
-    """Normalisation ``N(s) = Gamma(s+1) / (2·sqrt(pi)·Gamma(s+1/2))`` (1/rad) of the cos-2s
-    spreading, so that ``∫_{-pi}^{pi} N(s)·cos^(2s)(theta/2) d theta = 1``."""
-    s = np.asarray(s, dtype=float)
-    return np.exp(gammaln(s + 1.0) - gammaln(s + 0.5)) / (2.0 * math.sqrt(math.pi))
-
-
-def cos2s_spreading(theta: ArrayLike, mean_direction: float, s: ArrayLike) -> np.ndarray:
-    """Cos-2s directional spreading ``D = N(s)·cos^(2s)((theta - theta_0)/2)`` (1/rad).
-
-    Longuet-Higgins et al. (1963); unimodal, non-zero everywhere except exactly against the mean
-    direction ``theta_0`` (``mean_direction``, radians, direction waves travel toward). Larger
-    ``s`` means a narrower spread; the circular standard deviation is about ``sqrt(2/(s+1))`` rad.
-    """
-    half = 0.5 * (np.asarray(theta, dtype=float) - mean_direction)
-    s = np.asarray(s, dtype=float)
-    return cos2s_normalisation(s) * np.abs(np.cos(half)) ** (2.0 * s)
-
-
-def mitsuyasu_spreading_exponent(
-    omega: ArrayLike, omega_p: float, s_max: float = SPREADING_S_MAX
-) -> np.ndarray:
-    """Frequency-dependent cos-2s exponent ``s = s_max·(omega/omega_p)^5`` below the peak and
-    ``s_max·(omega/omega_p)^(-2.5)`` above it (Mitsuyasu et al. 1975 as simplified by Goda 2010,
-    §2.3; ``s_max = 10`` for wind waves). Waves are most collimated at the peak."""
-    ratio = np.asarray(omega, dtype=float) / omega_p
-    return np.where(ratio <= 1.0, s_max * ratio**5, s_max * ratio**-2.5)
-
-
-def cos2_spreading(theta: ArrayLike, mean_direction: float) -> np.ndarray:
-    """Cos² spreading ``D = (2/pi)·cos²(theta - theta_0)`` for ``|theta - theta_0| < pi/2``, else 0
-    (1/rad). It is Tessendorf's (2001, eq. 23) ``|k̂·ŵ|²`` factor with the waves that travel
-    against the wind removed and normalised to unit integral."""
-    delta = np.angle(np.exp(1j * (np.asarray(theta, dtype=float) - mean_direction)))
-    c = np.cos(delta)
-    return np.where(c > 0.0, (2.0 / math.pi) * c * c, 0.0)
 
 
 # --------------------------------------------------------------------------------------------

@@ -47,8 +47,13 @@ Turbulent foam wake
     (Tennekes & Lumley 1972, *A First Course in Turbulence*, §4.2; Naudascher 1965, *J. Fluid
     Mech.* 22, 625–656) — an approximation for a ship's wake, which is not axisymmetric. Its
     foam fraction is 1 at the stern and decays as ``exp(-s/(U·tau))`` with the water's age
-    ``s/U``; ``tau`` (:data:`WAKE_FOAM_DECAY_S`, 60 s) is a visual choice, not a published fit
-    (a white wake of a few ship lengths). Cross profile: ``(1 - (eta/b)²)²``.
+    ``s/U``. The surface stays white while the bubbles the hull and propeller mixed in are still
+    rising, so ``tau`` scales with the depth they were mixed to — taken as the hull's draft
+    ``T`` (an assumption) — over the rise speed of millimetre air bubbles, about 0.2 m/s (Clift,
+    Grace & Weber 1978, *Bubbles, Drops and Particles*, ch. 7): ``tau = T / 0.2 m/s``, at least
+    2 s (:func:`wake_foam_decay_s`). A tanker of 12 m draft keeps a white wake for about a
+    minute (half a kilometre at 14 kn, two ship lengths), a speedboat of 0.6 m for 3 s (50 m at
+    30 kn). Cross profile: ``(1 - (eta/b)²)²``.
 """
 
 from __future__ import annotations
@@ -61,7 +66,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import fft as sfft
 
-from .base import lowpass_weight
+from .base import cell_samples, lowpass_weight
 from .spectra import GRAVITY
 
 KNOT_M_S = 1852.0 / 3600.0
@@ -74,8 +79,11 @@ BREAKING_SLOPE = 0.44
 """Wave slope above which a crest breaks: ``a·k`` of the steepest Stokes wave
 (``H/lambda = 0.142``, Michell 1893)."""
 
-WAKE_FOAM_DECAY_S = 60.0
-"""e-folding age (s) of the foam in the turbulent wake (visual assumption)."""
+BUBBLE_RISE_M_S = 0.2
+"""Rise speed of millimetre air bubbles in sea water (m/s; Clift, Grace & Weber 1978)."""
+
+MIN_WAKE_FOAM_DECAY_S = 2.0
+"""Shortest e-folding age of wake foam (s), for hulls of almost no draft."""
 
 WAKE_SHIP_LENGTHS = 12.0
 """The wake is computed for at least this many ship lengths behind the vessel..."""
@@ -94,6 +102,12 @@ GRID_POINTS_PER_LENGTH = 8.0
 
 MAX_GRID_POINTS = 2048
 """Largest grid along either axis."""
+
+FOAM_CUTOFF = 1.0e-3
+"""Turbulent wake foam below this fraction is ignored when finding where a wake has foam."""
+
+MAX_FOAM_SAMPLES = 16
+"""Most samples per axis when a mesh vertex's footprint is averaged over the wake foam."""
 
 WRAP_DECAY = 3.0
 """The damping lowers a wave by ``exp(-WRAP_DECAY)`` over one period of the grid."""
@@ -137,6 +151,12 @@ class MovingVessel:
         dx = np.asarray(x, dtype=float) - self.x
         dy = np.asarray(y, dtype=float) - self.y
         return dx * math.cos(h) + dy * math.sin(h), -dx * math.sin(h) + dy * math.cos(h)
+
+
+def wake_foam_decay_s(vessel: MovingVessel) -> float:
+    """e-folding age (s) of the turbulent wake's foam: the hull draft over the bubbles' rise
+    speed, ``T / 0.2 m/s``, at least :data:`MIN_WAKE_FOAM_DECAY_S` (module docstring)."""
+    return max(vessel.draft_m / BUBBLE_RISE_M_S, MIN_WAKE_FOAM_DECAY_S)
 
 
 def transverse_wavelength(speed_m_s: float, gravity: float = GRAVITY) -> float:
@@ -295,7 +315,7 @@ class ShipWaves:
         age = np.maximum(s, 0.0) / v.speed_m_s
         # Ramp in over a tenth of the beam at the stern so the band starts softly.
         start = _smoothstep(s / (0.1 * v.beam_m))
-        return start * across * np.exp(-age / WAKE_FOAM_DECAY_S)
+        return start * across * np.exp(-age / wake_foam_decay_s(v))
 
     def foam(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Foam fraction (0–1): turbulent wake and breaking waves, overlapping as independent
@@ -304,6 +324,84 @@ class ShipWaves:
         if not self.moving:
             return a
         return 1.0 - (1.0 - a) * (1.0 - self.breaking_foam(x, y))
+
+    @functools.cached_property
+    def _breaking_box(self) -> tuple[float, float, float, float] | None:
+        """``(xi_min, xi_max, eta_min, eta_max)`` (m, vessel frame) of the grid cells whose
+        slope can make breaking foam, or None if none can."""
+        steep = self._slope > 0.7 * BREAKING_SLOPE
+        if not np.any(steep):
+            return None
+        rows, cols = np.nonzero(steep)
+        h = self.spacing_m
+        xi0, eta0 = self.origin
+        return (
+            xi0 + (cols.min() - 1) * h,
+            xi0 + (cols.max() + 1) * h,
+            eta0 + (rows.min() - 1) * h,
+            eta0 + (rows.max() + 1) * h,
+        )
+
+    def foam_region(self, x: np.ndarray, y: np.ndarray, margin_m: np.ndarray | float) -> np.ndarray:
+        """True where a point (x, y) (m) lies within ``margin_m`` of a region that can hold this
+        vessel's foam: the turbulent wake until its foam is below :data:`FOAM_CUTOFF`, and the
+        box of the grid cells steep enough to break."""
+        if not self.moving:
+            return np.zeros(np.broadcast(np.asarray(x), np.asarray(y)).shape, dtype=bool)
+        v = self.vessel
+        xi, eta = v.to_vessel_frame(x, y)
+        stern = -0.5 * v.length_m
+        behind = v.speed_m_s * wake_foam_decay_s(v) * math.log(1.0 / FOAM_CUTOFF)
+        half_width = 0.5 * v.beam_m * (1.0 + behind / v.beam_m) ** 0.2
+        inside = (
+            (xi <= stern + margin_m)
+            & (xi >= stern - behind - margin_m)
+            & (np.abs(eta) <= half_width + margin_m)
+        )
+        box = self._breaking_box
+        if box is not None:
+            inside |= (
+                (xi >= box[0] - margin_m)
+                & (xi <= box[1] + margin_m)
+                & (eta >= box[2] - margin_m)
+                & (eta <= box[3] + margin_m)
+            )
+        return inside
+
+    @property
+    def foam_feature_m(self) -> float:
+        """Smallest foam feature (m): a quarter of the smaller of the beam (turbulent wake) and
+        the transverse wavelength (breaking crests); inf at rest."""
+        if not self.moving:
+            return math.inf
+        return 0.25 * min(self.vessel.beam_m, self.wavelength_m)
+
+    def foam_averaged(
+        self,
+        x: np.ndarray,
+        y: np.ndarray,
+        azimuth_rad: np.ndarray,
+        radial_m: np.ndarray,
+        tangential_m: np.ndarray,
+    ) -> np.ndarray:
+        """Mean foam fraction over cells centred on world points (x, y) (m), 1-D arrays:
+        ``radial_m`` long along the azimuth ``azimuth_rad`` and ``tangential_m`` across it (a
+        polar mesh vertex's footprint). Cells larger than :attr:`foam_feature_m` are averaged
+        over a grid of up to :data:`MAX_FOAM_SAMPLES`² points, so a wake narrower than the cell
+        is neither missed between vertices nor spread over the whole cell at full strength."""
+        out = np.zeros(np.shape(x))
+        if not self.moving:
+            return out
+        cell = np.maximum(radial_m, tangential_m)
+        index = np.nonzero(self.foam_region(x, y, cell))[0]
+        n = np.clip(np.ceil(cell[index] / self.foam_feature_m), 1, MAX_FOAM_SAMPLES).astype(int)
+        for count in np.unique(n):
+            pick = index[n == count]
+            sx, sy = cell_samples(
+                x[pick], y[pick], azimuth_rad[pick], radial_m[pick], tangential_m[pick], int(count)
+            )
+            out[pick] = self.foam(sx, sy).mean(axis=1)
+        return out
 
 
 def _smoothstep(t: np.ndarray) -> np.ndarray:
@@ -338,6 +436,35 @@ class WakeField:
         clear = np.ones(np.broadcast(np.asarray(x), np.asarray(y)).shape)
         for waves in self.waves:
             clear *= 1.0 - waves.foam(x, y)
+        return 1.0 - clear
+
+    def reach_m(self, center_xy: tuple[float, float]) -> float:
+        """Distance (m) from ``center_xy`` within which a mesh should resolve the wakes: per
+        moving vessel, its distance plus half its length and the longer of one foam e-folding
+        length and two transverse wavelengths behind the stern; 0 if none moves."""
+        reach = 0.0
+        for waves in self.waves:
+            if not waves.moving:
+                continue
+            v = waves.vessel
+            behind = max(v.speed_m_s * wake_foam_decay_s(v), 2.0 * waves.wavelength_m)
+            distance = math.hypot(v.x - center_xy[0], v.y - center_xy[1])
+            reach = max(reach, distance + 0.5 * v.length_m + behind)
+        return reach
+
+    def foam_averaged(
+        self,
+        x: np.ndarray,
+        y: np.ndarray,
+        azimuth_rad: np.ndarray,
+        radial_m: np.ndarray,
+        tangential_m: np.ndarray,
+    ) -> np.ndarray:
+        """Foam fraction (0–1) of all wakes averaged over polar mesh cells (1-D arrays; see
+        :meth:`ShipWaves.foam_averaged`); vessels combine as independent coverages."""
+        clear = np.ones(np.shape(x))
+        for waves in self.waves:
+            clear *= 1.0 - waves.foam_averaged(x, y, azimuth_rad, radial_m, tangential_m)
         return 1.0 - clear
 
 

@@ -21,10 +21,20 @@ Reflectance (Koepke 1984)
     thins and fades within seconds, so averaged over its lifetime and area it reflects much
     less: Koepke's *effective* reflectance is ``R_eff = 0.22 ± 0.11`` in the visible (Koepke, P.
     (1984). Effective reflectance of oceanic whitecaps. *Appl. Opt.* 23(11), 1816–1824). The
-    coverage ``W`` counts young and decaying whitecaps together, and the foam field below holds
-    no foam age, so seahaze uses the effective value with the total coverage
-    (:data:`FOAM_REFLECTANCE`); :data:`FRESH_FOAM_REFLECTANCE` is there for a renderer that
-    shades only actively breaking crests.
+    coverage ``W`` counts young and decaying whitecaps together, so the mean reflectance of the
+    foam-covered area must be the effective value (:data:`FOAM_REFLECTANCE`).
+
+    Inside that area the reflectance is not uniform: the actively breaking front is fresh foam
+    (:data:`FRESH_FOAM_REFLECTANCE`), the foam left behind thins as it ages. The foam field has
+    no age, so :meth:`FoamField.foam_and_reflectance` takes the breaking rank as a proxy: the
+    most compressed crest is the youngest foam, and the reflectance falls exponentially with the
+    Jacobian's quantile, ``R(q) = 0.55·exp(-k·q/W)``, with ``k`` (:data:`FOAM_AGE_DECAY`, 2.18)
+    set so that the foam-weighted mean over a whitecap is exactly ``R_eff = 0.22`` — Koepke's
+    own model of the effective reflectance, a fresh reflectance decaying exponentially over a
+    whitecap's life, with the quantile standing in for the age. The result: bright white cores
+    (reflectance above 0.4 on 15 % of the covered area: the actively breaking part is a small
+    share of all whitecaps) fading into grey skirts, while the sea's mean albedo gain stays
+    ``W·R_eff``.
 
 Placement (Tessendorf 2001)
     A crest breaks where the choppy horizontal map ``x0 -> x0 + lambda·D(x0)`` compresses the
@@ -37,10 +47,18 @@ Placement (Tessendorf 2001)
     quantile ``q(J)``: 1 for ``q < W - h``, 0 for ``q > W + h``, ``h = W/2``. Whatever the
     shape of the distribution the mean foam fraction of the world area is then exactly ``W``;
     the edges are soft because ``J`` varies smoothly in space. For the FFT ocean only the
-    largest patch (wavelengths from 8 down to 1/8 of the peak wavelength) sets ``J``, so foam
-    marks breaking of the dominant waves and is not speckle at the scale of the short patches.
-    With zero choppiness the foam is placed with the Jacobian the surface would have at
-    ``lambda = 1`` (the same crests).
+    largest patch (wavelengths from 8 down to 1/8 of the peak wavelength) decides where the
+    foam is, so it marks breaking of the dominant waves and is not speckle at the scale of the
+    short patches. The short patches shape it: their compression, at :data:`DETAIL_WEIGHT`
+    (half) weight, is added to the indicator, ``J_0 + 0.5·Σ_i (J_i - 1)``, which breaks the
+    smooth blobs of the coarse grid into the ragged, holed, lacy patches of real whitecaps
+    (the short waves riding on a breaking crest break with it). A mesh can only carry a patch's
+    detail where its vertex spacing resolves that patch's grid, so each detail level ``l``
+    (patches 1..l added) has its own quantile table (each covering exactly ``W``) and the foam
+    at a vertex of spacing ``Δ`` blends the levels by :func:`~seahaze.ocean.base.lowpass_weight`
+    of four grid spacings of each patch: the full lace under the camera, the coarse blobs far
+    away, the coverage ``W`` everywhere. With zero choppiness the foam is placed with the
+    Jacobian the surface would have at ``lambda = 1`` (the same crests).
 
 Far field
     Beyond the mesh's fade radius breaking cannot be resolved; there the expected foam fraction
@@ -59,7 +77,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .base import OceanSurface
+from .base import OceanSurface, lowpass_weight
 from .fft import FFTOcean, sample_periodic_bilinear
 from .gerstner import GerstnerOcean
 
@@ -79,8 +97,47 @@ coverage ``W``."""
 FRESH_FOAM_REFLECTANCE = 0.55
 """Visible reflectance of fresh, dense foam (Whitlock et al. 1982, as used by Koepke 1984)."""
 
+EFFECTIVE_FRACTION = FOAM_REFLECTANCE / FRESH_FOAM_REFLECTANCE
+"""Koepke's ratio of the effective to the fresh reflectance (0.4)."""
+
 EDGE_SOFTNESS = 0.5
 """Half-width of the foam edge ramp in quantile space, as a fraction of ``W``."""
+
+
+def _foam_profile(u: np.ndarray) -> np.ndarray:
+    """Foam fraction as a function of ``u = q/W`` (the quantile in units of the coverage): 1 up
+    to ``1 - EDGE_SOFTNESS``, a smoothstep down to 0 at ``1 + EDGE_SOFTNESS``."""
+    t = np.clip((u - (1.0 - EDGE_SOFTNESS)) / (2.0 * EDGE_SOFTNESS), 0.0, 1.0)
+    return 1.0 - t * t * (3.0 - 2.0 * t)
+
+
+def _age_decay_constant() -> float:
+    """``k`` with ``∫f(u)·exp(-k·u) du / ∫f(u) du = EFFECTIVE_FRACTION`` (``f`` the foam
+    profile): the foam-weighted mean reflectance of a whitecap is then ``R_eff``."""
+    from scipy.optimize import brentq
+
+    nodes, weights = np.polynomial.legendre.leggauss(64)
+    end = 1.0 + EDGE_SOFTNESS
+    u = 0.5 * end * (nodes + 1.0)
+    w = 0.5 * end * weights * _foam_profile(u)
+
+    def excess(k: float) -> float:
+        return float(np.sum(w * np.exp(-k * u)) / np.sum(w)) - EFFECTIVE_FRACTION
+
+    return float(brentq(excess, 1e-6, 50.0, xtol=1e-12))
+
+
+FOAM_AGE_DECAY = _age_decay_constant()
+"""``k`` of the foam reflectance ``R(q) = R_fresh·exp(-k·q/W)`` (2.18; module docstring)."""
+
+DETAIL_WEIGHT = 0.5
+"""Weight of the shorter FFT patches' compression ``J_i - 1`` in the breaking indicator (a
+visual choice: 0 gives smooth blobs on the dominant crests, 1 scatters the foam into
+speckle of the short waves)."""
+
+DETAIL_GRID_SPACINGS = 4.0
+"""A detail patch is carried by mesh vertices spaced at most this many of its grid spacings
+(``lowpass_weight`` of that wavelength: full at one grid spacing, none at two)."""
 
 GERSTNER_SAMPLE_PEAK_WAVELENGTHS = 8.0
 """Side of the square (in peak wavelengths) over which a Gerstner surface's Jacobian
@@ -112,6 +169,32 @@ class _BreakingIndicator(Protocol):
     def __call__(self, x: np.ndarray, y: np.ndarray) -> np.ndarray: ...
 
 
+class _Level:
+    """One detail level of a foam field: its breaking indicator, the world-area quantile table
+    of that indicator, and the wavelength below which a mesh cannot carry its detail."""
+
+    def __init__(
+        self,
+        indicator: _BreakingIndicator,
+        sample_x: np.ndarray,
+        sample_y: np.ndarray,
+        world_weight: np.ndarray,
+        detail_wavelength_m: float,
+    ) -> None:
+        self.indicator = indicator
+        self.detail_wavelength_m = detail_wavelength_m
+        j_sample = indicator(sample_x, sample_y)
+        order = np.argsort(j_sample, kind="stable")
+        self.j_sorted = j_sample[order]
+        weights = np.maximum(world_weight[order], 0.0)
+        cumulative = np.cumsum(weights)
+        # Quantile at the middle of each sample's weight (a continuous, increasing map).
+        self.q_sorted = (cumulative - 0.5 * weights) / cumulative[-1]
+
+    def quantile(self, x0: np.ndarray, y0: np.ndarray) -> np.ndarray:
+        return np.interp(self.indicator(x0, y0), self.j_sorted, self.q_sorted)
+
+
 class FoamField:
     """Foam fraction in [0, 1] at rest positions of a surface (see the module docstring).
 
@@ -131,20 +214,14 @@ class FoamField:
         if not 0.0 <= w <= 1.0:
             raise ValueError("coverage must be in [0, 1]")
         self.coverage = float(w)
-        self._indicator = _breaking_indicator(surface)
-        if self._indicator is None or self.coverage == 0.0:
-            self._indicator = None
-            self._j_sorted = np.zeros(1)
-            self._q_sorted = np.zeros(1)
+        indicators = _breaking_indicators(surface)
+        self._levels: list[_Level] = []
+        if not indicators or self.coverage == 0.0:
             return
         assert isinstance(surface, FFTOcean | GerstnerOcean)
-        j_sample, world_weight = _tabulation_sample(surface, self._indicator)
-        order = np.argsort(j_sample, kind="stable")
-        self._j_sorted = j_sample[order]
-        weights = np.maximum(world_weight[order], 0.0)
-        cumulative = np.cumsum(weights)
-        # Quantile at the middle of each sample's weight (a continuous, increasing map).
-        self._q_sorted = (cumulative - 0.5 * weights) / cumulative[-1]
+        x, y, world_weight = _tabulation_sample(surface)
+        for indicator, wavelength in indicators:
+            self._levels.append(_Level(indicator, x, y, world_weight, wavelength))
         half_width = EDGE_SOFTNESS * min(self.coverage, 1.0 - self.coverage)
         self._q_lo = self.coverage - half_width
         self._q_hi = self.coverage + half_width
@@ -156,28 +233,87 @@ class FoamField:
         return self.coverage
 
     @property
+    def albedo(self) -> float:
+        """Mean foam albedo of a large area, ``W·R_eff`` (:func:`whitecap_albedo`)."""
+        return self.coverage * FOAM_REFLECTANCE
+
+    @property
     def jacobian_threshold(self) -> float:
-        """Jacobian value below which more than half of a point is foam (``q(J) = W``)."""
-        if self._indicator is None:
+        """Indicator value (full detail) below which more than half of a point is foam
+        (``q = W``)."""
+        if not self._levels:
             return -math.inf
-        return float(np.interp(self.coverage, self._q_sorted, self._j_sorted))
+        finest = self._levels[-1]
+        return float(np.interp(self.coverage, finest.q_sorted, finest.j_sorted))
 
     def breaking_jacobian(self, x0: np.ndarray, y0: np.ndarray) -> np.ndarray:
-        """The Jacobian that places foam, at rest positions (m)."""
-        if self._indicator is None:
+        """The breaking indicator that places foam (full detail), at rest positions (m): the
+        largest patch's Jacobian plus the detail of the shorter ones."""
+        if not self._levels:
             return np.ones(np.broadcast(np.asarray(x0), np.asarray(y0)).shape)
-        return self._indicator(np.asarray(x0, dtype=float), np.asarray(y0, dtype=float))
+        return self._levels[-1].indicator(np.asarray(x0, dtype=float), np.asarray(y0, dtype=float))
 
-    def __call__(self, x0: np.ndarray, y0: np.ndarray) -> np.ndarray:
-        """Foam fraction (0–1) at rest positions ``(x0, y0)`` (m), any equal shapes."""
-        shape = np.broadcast(np.asarray(x0), np.asarray(y0)).shape
-        if self._indicator is None:
-            return np.zeros(shape)
-        q = np.interp(self.breaking_jacobian(x0, y0), self._j_sorted, self._q_sorted)
+    def __call__(
+        self, x0: np.ndarray, y0: np.ndarray, spacing_m: np.ndarray | float | None = None
+    ) -> np.ndarray:
+        """Foam fraction (0–1) at rest positions ``(x0, y0)`` (m), any equal shapes; with a
+        mesh vertex spacing ``spacing_m`` (m) only the detail that spacing carries."""
+        return self.foam_and_reflectance(x0, y0, spacing_m)[0]
+
+    def foam_and_reflectance(
+        self, x0: np.ndarray, y0: np.ndarray, spacing_m: np.ndarray | float | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Foam fraction (0–1) and the visible reflectance of that foam at rest positions (m).
+
+        The reflectance is ``R_fresh·exp(-k·q/W)`` (module docstring): 0.55 on the most
+        compressed crests, fading toward the whitecap's edge; its foam-weighted mean over the
+        sea is :data:`FOAM_REFLECTANCE`. Where there is no foam it is still defined (the value
+        the foam would have there). ``spacing_m``: a mesh's vertex spacing (m), which blends
+        the detail levels (module docstring); None gives the full detail.
+        """
+        x0, y0 = np.broadcast_arrays(np.asarray(x0, dtype=float), np.asarray(y0, dtype=float))
+        shape = x0.shape
+        if not self._levels:
+            return np.zeros(shape), np.full(shape, FOAM_REFLECTANCE)
+        fraction = np.zeros(shape)
+        albedo = np.zeros(shape)
+        for level, weight in zip(self._levels, self._level_weights(spacing_m, shape), strict=True):
+            if not np.any(weight > 0.0):
+                continue
+            q = level.quantile(x0, y0)
+            f = self._profile(q)
+            fraction += weight * f
+            albedo += (
+                weight * f * FRESH_FOAM_REFLECTANCE * np.exp(-FOAM_AGE_DECAY * q / self.coverage)
+            )
+        reflectance = np.where(
+            fraction > 0.0, albedo / np.maximum(fraction, 1e-300), FOAM_REFLECTANCE
+        )
+        if len(self._levels) == 1 or spacing_m is None:  # one level: exact where no foam too
+            q = self._levels[-1].quantile(x0, y0)
+            reflectance = FRESH_FOAM_REFLECTANCE * np.exp(-FOAM_AGE_DECAY * q / self.coverage)
+        return fraction, reflectance
+
+    def _profile(self, q: np.ndarray) -> np.ndarray:
         if self._q_hi <= self._q_lo:
-            return (q <= self.coverage).astype(float).reshape(shape)
+            return (q <= self.coverage).astype(float)
         t = np.clip((q - self._q_lo) / (self._q_hi - self._q_lo), 0.0, 1.0)
-        return (1.0 - t * t * (3.0 - 2.0 * t)).reshape(shape)
+        return 1.0 - t * t * (3.0 - 2.0 * t)
+
+    def _level_weights(
+        self, spacing_m: np.ndarray | float | None, shape: tuple[int, ...]
+    ) -> list[np.ndarray]:
+        """Weights (summing to 1) of the detail levels at a vertex spacing: level ``l`` gets
+        ``beta_l - beta_(l+1)``, ``beta_l`` the low-pass weight of its finest patch's detail."""
+        n = len(self._levels)
+        if spacing_m is None:
+            return [np.zeros(shape)] * (n - 1) + [np.ones(shape)]
+        spacing = np.broadcast_to(np.asarray(spacing_m, dtype=float), shape)
+        betas = [np.ones(shape)]
+        for level in self._levels[1:]:
+            betas.append(np.minimum(betas[-1], lowpass_weight(level.detail_wavelength_m, spacing)))
+        betas.append(np.zeros(shape))
+        return [betas[i] - betas[i + 1] for i in range(n)]
 
 
 def foam_fraction(
@@ -188,18 +324,28 @@ def foam_fraction(
     return FoamField(surface, wind_speed)(x0, y0)
 
 
-def _breaking_indicator(surface: OceanSurface) -> _BreakingIndicator | None:
-    """A function ``(x0, y0) -> J`` whose low values mark breaking crests; ``None`` if the
-    surface cannot break (flat)."""
+def _breaking_indicators(surface: OceanSurface) -> list[tuple[_BreakingIndicator, float]]:
+    """The breaking indicators ``(x0, y0) -> J`` of the detail levels, coarsest first, each with
+    the wavelength (m) below which a mesh cannot carry its detail (0 for the first); empty if
+    the surface cannot break (flat). Low values mark breaking crests."""
     if isinstance(surface, FFTOcean):
         lam = surface.choppiness if surface.choppiness > 0.0 else 1.0
-        patch = surface.cascades[0]
-        jac = surface.patch_jacobian(0, lam)
+        grids = [surface.patch_jacobian(i, lam) for i in range(len(surface.cascades))]
+        sizes = [c.size_m for c in surface.cascades]
+        levels: list[tuple[_BreakingIndicator, float]] = []
+        for count in range(1, len(grids) + 1):
 
-        def fft_indicator(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-            return sample_periodic_bilinear(jac[None], patch.size_m, x, y)[0]
+            def fft_indicator(x: np.ndarray, y: np.ndarray, count: int = count) -> np.ndarray:
+                total = sample_periodic_bilinear(grids[0][None], sizes[0], x, y)[0]
+                for grid, size in zip(grids[1:count], sizes[1:count], strict=True):
+                    detail = sample_periodic_bilinear(grid[None], size, x, y)[0] - 1.0
+                    total = total + DETAIL_WEIGHT * detail
+                return total
 
-        return fft_indicator
+            cascade = surface.cascades[count - 1]
+            wavelength = 0.0 if count == 1 else DETAIL_GRID_SPACINGS * cascade.spacing_m
+            levels.append((fft_indicator, wavelength))
+        return levels
     if isinstance(surface, GerstnerOcean):
         probe = surface
         if surface.choppiness <= 0.0:
@@ -214,18 +360,19 @@ def _breaking_indicator(surface: OceanSurface) -> _BreakingIndicator | None:
                 surface.gravity,
                 warn=False,
             )
-        return probe.jacobian
-    return None
+        return [(probe.jacobian, 0.0)]
+    return []
 
 
 def _tabulation_sample(
-    surface: FFTOcean | GerstnerOcean, indicator: _BreakingIndicator
-) -> tuple[np.ndarray, np.ndarray]:
-    """Breaking Jacobian and world-area weight (the surface's own Jacobian) at a deterministic
-    set of rest positions covering the surface's statistics."""
+    surface: FFTOcean | GerstnerOcean,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A deterministic set of rest positions covering the surface's statistics, and the world
+    area each stands for (the surface's own Jacobian: ``dA0`` covers ``J·dA0``)."""
     if isinstance(surface, FFTOcean):
         # Nodes and the midpoints between them: the indicator is bilinear between nodes,
-        # which lifts its minima, so the nodes alone would over-represent low values.
+        # which lifts its minima, so the nodes alone would over-represent low values. The
+        # shorter patches, of incommensurate periods, are sampled at scattered phases.
         patch = surface.cascades[0]
         nodes = np.arange(2 * patch.resolution) * (0.5 * patch.spacing_m)
     else:
@@ -233,8 +380,5 @@ def _tabulation_sample(
         nodes = (np.arange(SAMPLE_RESOLUTION) + 0.5) * (side / SAMPLE_RESOLUTION)
     x, y = (a.ravel() for a in np.meshgrid(nodes, nodes))
     if surface.choppiness <= 0.0:
-        return indicator(x, y), np.ones_like(x)
-    if isinstance(surface, GerstnerOcean):  # the indicator is the surface's own Jacobian
-        jac = surface.jacobian(x, y)
-        return jac, jac
-    return indicator(x, y), surface.jacobian(x, y)
+        return x, y, np.ones_like(x)
+    return x, y, surface.jacobian(x, y)

@@ -7,6 +7,14 @@ light). The box is sized by :func:`seahaze.haze.haze_box_half_width` for the thi
 run; vertically it runs from below the sea surface to the haze top. The medium is changed per
 level through ``mi.traverse`` (no reload, no recompilation); the clean pass sets its extinction
 to zero. The ``physical`` mode computes the haze itself and loads the scene without the box.
+
+The sea's BSDF (:func:`sea_surface_bsdf`) blends, by the sea mesh's per-vertex attributes,
+a far and a near water lobe (``blendbsdf`` weighted by ``vertex_near_roughness``: each vertex's
+slope budget, docs/ocean.md) and then the water with a Lambertian foam whose reflectance is
+``vertex_foam_reflectance`` (weighted by ``vertex_foam``). Where no shape is attached to a
+surface interaction (a BSDF sampled with a bare ``SurfaceInteraction3f``, as the ``physical``
+mode's photon table does) the attribute textures evaluate to 0 and the blend is the far water
+alone, :func:`_sea_bsdf` with :attr:`LoadedScene.sea_roughness`.
 """
 
 from __future__ import annotations
@@ -18,9 +26,17 @@ import numpy as np
 
 from ..camera import Camera
 from ..haze import HAZE_BOTTOM_M, Extinction, extinction_rgb, haze_box_half_width
+from ..ocean import FOAM_REFLECTANCE
 from ..spec import SceneSpec
 from ..visibility import channel_extinction
-from ..world import MeshData, SceneGeometry, sun_direction
+from ..world import (
+    SEA_FOAM,
+    SEA_FOAM_REFLECTANCE,
+    SEA_NEAR_ROUGHNESS,
+    MeshData,
+    SceneGeometry,
+    sun_direction,
+)
 
 HAZE_ID = "haze"
 HAZE_BOX_ID = "haze_box"
@@ -72,6 +88,8 @@ def _mesh(mesh: MeshData, bsdf: dict) -> Any:
     props = mi.Properties()
     props["bsdf"] = mi.load_dict(bsdf)
     m = mi.Mesh(mesh.name, vertex_count=len(mesh.vertices), face_count=len(mesh.faces), props=props)
+    for name, values in mesh.attributes.items():
+        m.add_attribute(f"vertex_{name}", 1, np.ascontiguousarray(values, dtype=np.float32))
     params = mi.traverse(m)
     params["vertex_positions"] = np.ascontiguousarray(mesh.vertices, dtype=np.float32).ravel()
     params["faces"] = np.ascontiguousarray(mesh.faces, dtype=np.uint32).ravel()
@@ -92,6 +110,33 @@ def _sea_bsdf(spec: SceneSpec, roughness: float) -> dict:
         "ext_ior": 1.000277,
         "nonlinear": False,
         "diffuse_reflectance": {"type": "rgb", "value": list(spec.sea.water_color)},
+    }
+
+
+def sea_surface_bsdf(spec: SceneSpec, geometry: SceneGeometry) -> dict:
+    """The sea shape's BSDF: water of :func:`_sea_bsdf`, its near and far roughness lobes
+    mixed per vertex, under foam where the sea mesh has some (module docstring)."""
+    attributes = geometry.sea.attributes
+    water = _sea_bsdf(spec, geometry.sea_roughness)
+    near = geometry.sea_roughness_near
+    if near is not None and SEA_NEAR_ROUGHNESS in attributes:
+        water = {
+            "type": "blendbsdf",
+            "weight": {"type": "mesh_attribute", "name": f"vertex_{SEA_NEAR_ROUGHNESS}"},
+            "bsdf_0": water,
+            "bsdf_1": _sea_bsdf(spec, near),
+        }
+    if SEA_FOAM not in attributes:
+        return water
+    foam = {
+        "type": "diffuse",
+        "reflectance": {"type": "mesh_attribute", "name": f"vertex_{SEA_FOAM_REFLECTANCE}"},
+    }
+    return {
+        "type": "blendbsdf",
+        "weight": {"type": "mesh_attribute", "name": f"vertex_{SEA_FOAM}"},
+        "bsdf_0": water,
+        "bsdf_1": foam,
     }
 
 
@@ -137,6 +182,17 @@ class LoadedScene:
     """Mitsuba shape registry id → vessel index (the sea and the haze box map to -1, -2)."""
     spec: SceneSpec | None = None
     """The scene spec it was built from (the ``physical`` mode needs the sun and sky)."""
+    sea_roughness: float = 0.0
+    """Beckmann ``alpha`` (dimensionless) of the sea as a flat surface: all of Cox–Munk's slopes
+    for the wind (or the spec's ``sea.roughness``), the far sea's lobe. A model of the sea as a
+    plane (the ``physical`` mode's table) reflects with ``_sea_bsdf(spec, sea_roughness)``."""
+    sea_foam_coverage: float = 0.0
+    """Mean fraction (0–1) of the sea surface covered by foam: the whitecap coverage law's
+    ``W`` for the wind (0.0046 at 8 m/s, 0.039 at 15 m/s; 0 without whitecaps or on a flat
+    sea). A plane model mixes ``(1 - W)·water + W·Lambertian(sea_foam_reflectance)``."""
+    sea_foam_reflectance: float = FOAM_REFLECTANCE
+    """Mean (effective) visible reflectance of that foam, a Lambertian albedo (0.22, Koepke
+    1984): the foam-weighted mean of the per-vertex foam reflectance."""
 
     @property
     def has_haze_box(self) -> bool:
@@ -233,7 +289,7 @@ def build_scene(
             "bsdf": {"type": "null"},
             "interior": {"type": "ref", "id": HAZE_ID},
         },
-        "sea": _mesh(geometry.sea, _sea_bsdf(spec, geometry.sea_roughness)),
+        "sea": _mesh(geometry.sea, sea_surface_bsdf(spec, geometry)),
     }
     if not haze_box:
         del scene[HAZE_BOX_ID], scene[HAZE_ID]
@@ -249,4 +305,14 @@ def build_scene(
         sid = shape.id()
         index = vessel_of_part.get(sid, -2 if sid == HAZE_BOX_ID else -1)
         shape_ids[shape_registry_id(shape)] = index
-    return LoadedScene(loaded, params, camera, half_width, top, shape_ids, spec)
+    return LoadedScene(
+        loaded,
+        params,
+        camera,
+        half_width,
+        top,
+        shape_ids,
+        spec,
+        sea_roughness=geometry.sea_roughness,
+        sea_foam_coverage=geometry.sea_foam_coverage,
+    )

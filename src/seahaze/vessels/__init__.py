@@ -17,11 +17,14 @@ from seahaze.vessels.layout import (
 )
 from seahaze.vessels.library import (
     CLASS_NAMES,
+    KNOT_M_S,
     VESSEL_CLASSES,
     VesselClass,
     build_vessel,
     class_id,
     length_problem,
+    sample_speed_m_s,
+    speed_problem,
 )
 from seahaze.vessels.materials import Material
 from seahaze.vessels.model import VesselModel, VesselPart
@@ -35,6 +38,7 @@ from seahaze.vessels.user_mesh import (
 __all__ = [
     "CLASS_NAMES",
     "DISTRIBUTIONS",
+    "KNOT_M_S",
     "SUPPORTED_FORMATS",
     "VESSEL_CLASSES",
     "ExplicitVessel",
@@ -54,4 +58,6 @@ __all__ = [
     "place_on_sea",
     "resolve_mesh_path",
     "sample_layout",
+    "sample_speed_m_s",
+    "speed_problem",
 ]

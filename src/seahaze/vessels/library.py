@@ -135,6 +135,7 @@ __all__ = [
     "get_class",
     "sample_dimensions",
     "sample_speed_m_s",
+    "speed_problem",
 ]
 
 KNOT_M_S = 1852.0 / 3600.0
@@ -355,6 +356,20 @@ def length_problem(kind: str, length_m: float) -> str | None:
     return f"{kind} length {float(length_m):g} m is outside the {kind} range [{lo:g}, {hi:g}] m"
 
 
+def speed_problem(kind: str, speed_kn: float) -> str | None:
+    """Why ``speed_kn`` (knots through the water) does not fit the class ``kind``: faster than
+    the top of its service-speed range (None when ``0 <= speed_kn <= top``; 0 is stopped)."""
+    top = get_class(kind).service_speed_kn[1]
+    if 0.0 <= float(speed_kn) <= top:
+        return None
+    if top == 0.0:
+        return f"a {kind} is moored: speed {float(speed_kn):g} kn; allowed: 0"
+    return (
+        f"{kind} speed {float(speed_kn):g} kn is outside the {kind} range; allowed: 0 (stopped) "
+        f"to {top:g} kn"
+    )
+
+
 def _checked_length(
     vessel_class: VesselClass, length_m: float | None, rng: np.random.Generator
 ) -> float:
@@ -393,7 +408,7 @@ def build_vessel(kind: str, length_m: float | None, rng: np.random.Generator) ->
     """
     dims = sample_dimensions(kind, length_m, rng)
     parts = get_class(kind).builder(dims, rng)
-    model = VesselModel(kind, dims.length, dims.beam, dims.draft, 0.0, parts)
+    model = VesselModel(kind, dims.length, dims.beam, dims.draft, 0.0, parts, dims.draft)
     lo, hi = model.bounds()
     # Report what the geometry really reaches (fin keels, masts), not the nominal values.
     model.draft_m = float(-lo[2])

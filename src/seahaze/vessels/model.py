@@ -31,6 +31,8 @@ class VesselModel:
 
     ``length_m``/``beam_m`` are overall length and breadth, ``draft_m`` the depth of the lowest
     point below the waterline and ``air_draft_m`` the height of the highest point above it.
+    ``hull_draft_m`` is the draft of the hull body that displaces water (without a sailboat's
+    fin keel); None means ``draft_m``. It sets the vessel's wave making.
     """
 
     kind: str
@@ -39,6 +41,12 @@ class VesselModel:
     draft_m: float
     air_draft_m: float
     parts: list[VesselPart] = field(default_factory=list)
+    hull_draft_m: float | None = None
+
+    @property
+    def displacing_draft_m(self) -> float:
+        """Draft of the hull body (m): :attr:`hull_draft_m`, else :attr:`draft_m`."""
+        return self.draft_m if self.hull_draft_m is None else self.hull_draft_m
 
     def bounds(self) -> np.ndarray:
         """Axis-aligned bounds of all parts as ``[[xmin, ymin, zmin], [xmax, ymax, zmax]]``."""
