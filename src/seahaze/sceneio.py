@@ -3,7 +3,13 @@
 Every problem is reported at once, each with ``file:line``, the dotted field and what is
 allowed, so a user fixes a file in one pass. Unknown keys and duplicate keys are errors.
 User mesh files named by the scene are found, read and checked here too, and their paths made
-absolute in the returned spec, so a bad file is a located message, never a traceback later.
+absolute in the returned spec, so a bad file is a located message, never a traceback later;
+so is a vessel layout that cannot be built (a vessel over the camera, two on one spot, a
+sampler that cannot fit its vessels).
+
+Hostile files are refused before they cost anything (:mod:`seahaze.yamlguard`,
+docs/limits.md): a scene file is a regular file of at most 1 MiB, its YAML nests at most 32
+levels, and its aliases neither refer to themselves nor expand beyond 50,000 nodes.
 """
 
 from __future__ import annotations
@@ -11,12 +17,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, get_args, get_origin
 
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from .spec import SceneSpec, field_bounds, model_in
+from .spec import BOUND_KINDS, SceneSpec, field_bounds, model_in
+from .yamlguard import MAX_SCENE_BYTES, YamlLimitError, compose_limited, read_limited_text
 
 Loc = tuple[str | int, ...]
 
@@ -46,21 +53,25 @@ class SceneFileError(Exception):
 def _index_lines(
     node: yaml.Node, loc: Loc, lines: dict[Loc, int], dupes: list[tuple[Loc, int]]
 ) -> None:
-    """Record the 1-based line of every mapping key and sequence item, and duplicate keys."""
-    lines.setdefault(loc, node.start_mark.line + 1)
-    if isinstance(node, yaml.MappingNode):
-        seen: set[str] = set()
-        for key_node, value_node in node.value:
-            key = str(key_node.value)
-            child = (*loc, key)
-            if key in seen:
-                dupes.append((child, key_node.start_mark.line + 1))
-            seen.add(key)
-            lines[child] = key_node.start_mark.line + 1
-            _index_lines(value_node, child, lines, dupes)
-    elif isinstance(node, yaml.SequenceNode):
-        for i, item in enumerate(node.value):
-            _index_lines(item, (*loc, i), lines, dupes)
+    """Record the 1-based line of every mapping key and sequence item, and duplicate keys.
+
+    Iterative, so its depth is no limit (:mod:`seahaze.yamlguard` has bounded the node count)."""
+    stack: list[tuple[yaml.Node, Loc]] = [(node, loc)]
+    while stack:
+        node, loc = stack.pop()
+        lines.setdefault(loc, node.start_mark.line + 1)
+        if isinstance(node, yaml.MappingNode):
+            seen: set[str] = set()
+            for key_node, value_node in node.value:
+                key = str(key_node.value)
+                child = (*loc, key)
+                if key in seen:
+                    dupes.append((child, key_node.start_mark.line + 1))
+                seen.add(key)
+                lines[child] = key_node.start_mark.line + 1
+                stack.append((value_node, child))
+        elif isinstance(node, yaml.SequenceNode):
+            stack += [(item, (*loc, i)) for i, item in enumerate(node.value)]
 
 
 def _line_for(loc: Loc, lines: dict[Loc, int]) -> int:
@@ -94,11 +105,14 @@ def _allowed(loc: Loc) -> str:
     if info is None:
         return ""
     symbols = {"ge": ">=", "gt": ">", "le": "<=", "lt": "<"}
+    found = field_bounds(info)
+    if loc and isinstance(loc[-1], int):
+        found = _item_bounds(info.annotation, loc[-1]) or found
     bounds = [
         f"{symbols[kind]} {value:g}"
         if isinstance(value, float | int)
         else f"{symbols[kind]} {value}"
-        for kind, value in field_bounds(info)
+        for kind, value in found
     ]
     extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
     unit = extra.get("unit")
@@ -108,6 +122,23 @@ def _allowed(loc: Loc) -> str:
     if unit and unit != "1":
         parts.append(f"in {unit}")
     return f" (allowed: {', '.join(parts)})" if parts else ""
+
+
+def _item_bounds(annotation: Any, index: int) -> list[tuple[str, Any]]:
+    """The bounds of item ``index`` of a ``list[Annotated[...]]`` or ``tuple[Annotated, ...]``
+    field (such as ``haze.levels`` or ``camera.resolution``)."""
+    args = [a for a in get_args(annotation) if a is not type(None)]
+    if get_origin(annotation) is tuple:
+        args = args[index : index + 1]
+    elif get_origin(annotation) is not list:
+        return []
+    return [
+        (kind, getattr(bound, kind))
+        for meta in getattr(args[0] if args else None, "__metadata__", ())
+        for bound in getattr(meta, "metadata", [meta])
+        for kind in BOUND_KINDS
+        if getattr(bound, kind, None) is not None
+    ]
 
 
 def _dotted(loc: Loc) -> str:
@@ -182,13 +213,9 @@ def parse_scene_text(
     working directory), then in the repository's ``assets/``.
     """
     try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = mark.line + 1 if mark is not None else 0
-        reason = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise SceneFileError([Problem(file, line, "", f"not valid YAML: {reason}")]) from None
+        data, node = compose_limited(text)
+    except YamlLimitError as exc:
+        raise SceneFileError([Problem(file, exc.line, "", exc.message)]) from None
     if data is None:
         data = {}
     if not isinstance(data, dict):
@@ -213,6 +240,11 @@ def parse_scene_text(
         problems += _check_vessel_classes(spec, file, lines)
         mesh_problems, spec = _resolve_user_meshes(spec, file, lines, base_dir)
         problems += mesh_problems
+    if spec is not None and not problems:
+        problems += [
+            Problem(file, _line_for(loc, lines), _dotted(loc), message)
+            for loc, message in layout_problems(spec)
+        ]
     if problems:
         raise SceneFileError(sorted(problems, key=lambda p: p.line))
     assert spec is not None
@@ -254,6 +286,27 @@ def _check_vessel_classes(spec: SceneSpec, file: str, lines: dict[Loc, int]) -> 
                 )
             )
     return problems
+
+
+def layout_problems(spec: SceneSpec) -> list[tuple[Loc, str]]:
+    """Whether the vessel layout of ``spec`` (with its ``render.seed``) can be built: a vessel
+    over the camera, two on one spot or a sampler that cannot fit its vessels would otherwise
+    fail the render. Returns ``(location, message)`` pairs; the layout is cheap (no meshes
+    but the user meshes, which are small)."""
+    from .camera import Camera
+    from .world import layout_vessels
+
+    if not spec.vessels.placed and (spec.vessels.sample is None or not spec.vessels.sample.count):
+        return []
+    try:
+        layout_vessels(spec, Camera.from_spec(spec.camera))
+    except (ValueError, FileNotFoundError) as exc:  # LayoutError is a ValueError
+        text = str(exc).strip().splitlines()
+        message = text[0] if text else type(exc).__name__
+        sample_failed = message.startswith("could not place vessel")
+        loc: Loc = ("vessels", "sample") if sample_failed else ("vessels", "placed")
+        return [(loc, f"the vessels cannot be laid out: {message}")]
+    return []
 
 
 def _resolve_user_meshes(
@@ -334,10 +387,8 @@ def load_scene(path: str | Path) -> tuple[SceneSpec, str]:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SceneFileError([Problem(str(path), 0, "", "no such file")]) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneFileError([Problem(str(path), 0, "", f"cannot read: {exc}")]) from None
+        text = read_limited_text(path, MAX_SCENE_BYTES, "a scene file", "a scene is a YAML file")
+    except YamlLimitError as exc:
+        raise SceneFileError([Problem(str(path), exc.line, "", exc.message)]) from None
     spec = parse_scene_text(text, str(path), path.parent)
     return spec, spec.name or path.stem
