@@ -506,10 +506,11 @@ class RenderSpec(_Spec):
         description="Master seed: sampling noise, and the sea and layout when they have no "
         "seed of their own (`--seed` overrides).",
     )
-    variant: str = Field(
+    variant: Literal["auto", "cuda_ad_rgb", "llvm_ad_rgb"] = Field(
         "auto",
-        description="Mitsuba variant: `auto` (cuda, then llvm, then scalar) or a name such as "
-        "`llvm_ad_rgb`.",
+        description="Mitsuba variant: `auto` (`cuda_ad_rgb` where a GPU works, else "
+        "`llvm_ad_rgb`), `cuda_ad_rgb` or `llvm_ad_rgb` (no other variant can render seahaze's "
+        "passes).",
     )
     max_depth: int = Field(
         -1,
@@ -635,6 +636,9 @@ class OverrideError(ValueError):
 
 RENDER_MODES: tuple[str, ...] = get_args(RenderSpec.model_fields["mode"].annotation)
 """The hazy-level renderers, in the order the CLI lists them."""
+MITSUBA_VARIANTS: tuple[str, ...] = get_args(RenderSpec.model_fields["variant"].annotation)[1:]
+"""The Mitsuba variants seahaze renders with, in the order ``auto`` tries them
+(:mod:`seahaze.render.variant`)."""
 
 
 def with_changes(spec: SceneSpec, changes: Mapping[str, Any]) -> SceneSpec:
