@@ -9,11 +9,12 @@ sampler that cannot fit its vessels).
 
 Hostile files are refused before they cost anything (:mod:`seahaze.yamlguard`,
 docs/limits.md): a scene file is a regular file of at most 1 MiB, its YAML nests at most 32
-levels, and its aliases neither refer to themselves nor expand beyond 50,000 nodes.
+levels, and its aliases neither refer to themselves nor expand beyond 20,000 nodes.
 """
 
 from __future__ import annotations
 
+import datetime
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +41,10 @@ class Problem:
     def __str__(self) -> str:
         where = f"{self.file}:{self.line}" if self.line else self.file
         return f"{where}: {self.field or '(file)'}: {self.message}"
+
+
+MAX_PROBLEMS = 20
+"""Most problems reported per file (a file of 20,000 unknown keys gets 20 lines and a count)."""
 
 
 class SceneFileError(Exception):
@@ -165,7 +170,10 @@ def _problems_from_validation(
     err: ValidationError, file: str, lines: dict[Loc, int]
 ) -> list[Problem]:
     problems = []
-    for item in err.errors():
+    # A file of thousands of unknown keys gets thousands of errors: only the first are located
+    # (MAX_PROBLEMS are shown), the count of the others is kept.
+    errors = err.errors(include_url=False)
+    for item in errors[: 5 * MAX_PROBLEMS]:
         loc = tuple(
             p for p in item["loc"] if not (isinstance(p, str) and p.startswith("function-"))
         )
@@ -184,24 +192,30 @@ def _problems_from_validation(
             message = item["msg"].replace("Value error, ", "") + _allowed(loc)
         problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), message))
     # Several union branches can report the same place; keep one message per place and text.
-    return list(dict.fromkeys(problems))
+    problems = list(dict.fromkeys(problems))
+    if len(errors) > 5 * MAX_PROBLEMS:
+        problems.append(Problem(file, 0, "", f"… and {len(errors) - 5 * MAX_PROBLEMS} more"))
+    return problems
 
 
 def _reject_non_finite(data: Any, loc: Loc, lines: dict[Loc, int], file: str) -> list[Problem]:
-    """YAML accepts .nan and .inf as floats; no scene field means them."""
-    if isinstance(data, float) and not math.isfinite(data):
-        return [
-            Problem(file, _line_for(loc, lines), _dotted(loc), f"{data} is not a finite number")
-        ]
-    if isinstance(data, dict):
-        return [
-            p for k, v in data.items() for p in _reject_non_finite(v, (*loc, str(k)), lines, file)
-        ]
-    if isinstance(data, list):
-        return [
-            p for i, v in enumerate(data) for p in _reject_non_finite(v, (*loc, i), lines, file)
-        ]
-    return []
+    """YAML accepts .nan and .inf as floats, and dates and !!binary as values; no scene field
+    means them. Iterative: the structure's depth is bounded but need not be small."""
+    problems, stack = [], [(data, loc)]
+    while stack and len(problems) < MAX_PROBLEMS:
+        item, where = stack.pop()
+        message = None
+        if isinstance(item, float) and not math.isfinite(item):
+            message = f"{item} is not a finite number"
+        elif isinstance(item, bytes | datetime.date | set):
+            message = f"a YAML {type(item).__name__} value; write a plain number or string"
+        elif isinstance(item, dict):
+            stack += [(v, (*where, str(k))) for k, v in item.items()]
+        elif isinstance(item, list):
+            stack += [(v, (*where, i)) for i, v in enumerate(item)]
+        if message:
+            problems.append(Problem(file, _line_for(where, lines), _dotted(where), message))
+    return problems
 
 
 def parse_scene_text(
@@ -246,7 +260,12 @@ def parse_scene_text(
             for loc, message in layout_problems(spec)
         ]
     if problems:
-        raise SceneFileError(sorted(problems, key=lambda p: p.line))
+        problems = sorted(problems, key=lambda p: (p.message.startswith("…"), p.line))
+        if len(problems) > MAX_PROBLEMS:
+            more = len(problems) - MAX_PROBLEMS
+            rest = Problem(file, 0, "", f"… and {more} more problem(s)")
+            problems = [*problems[:MAX_PROBLEMS], rest]
+        raise SceneFileError(problems)
     assert spec is not None
     return spec
 
