@@ -53,6 +53,9 @@ def inspect_folder(root: Path) -> FolderState:
     """Whose ``root`` is. Raises :class:`ForeignFolderError` for a file, a non-empty folder
     seahaze did not make, another program's ``dataset.json`` or a newer format."""
     if not root.exists() and not root.is_symlink():
+        parent = next((p for p in root.parents if p.exists()), None)
+        if parent is not None and not parent.is_dir():
+            raise ForeignFolderError(f"--out {root}: {parent} is a file, not a folder")
         return FolderState()
     if not root.is_dir():
         raise ForeignFolderError(f"--out {root} is not a folder; give a new or empty folder")

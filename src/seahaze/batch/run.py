@@ -215,6 +215,22 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
             "files are built from every image and label in the level folders: move them out "
             "of the folder (or delete them) and rerun"
         )
+    blocked = next(
+        (
+            path
+            for job in plan.jobs
+            for path in ledger.layout.scene_files(
+                job.name, [level_name(v) for v in job.spec.haze.levels], job.spec.render.write_exr
+            )
+            if path.exists() and not path.is_file()
+        ),
+        None,
+    )
+    if blocked is not None:
+        raise ForeignFolderError(
+            f"{blocked} is not a file, but seahaze writes one there: move it out of the folder "
+            "and rerun"
+        )
     _mark_done_scenes(ledger, (existing or {}).get("scenes") or {}, planned["scenes"], reporter)
     pending = len(plan.jobs) - ledger.done_before
     if ledger.done_before and pending:
