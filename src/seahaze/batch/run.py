@@ -43,7 +43,7 @@ from ..fileio import write_json, write_text
 from ..metric.errors import MetricInputError
 from ..metric.ground_truth import write_coco
 from ..vessels import CLASS_NAMES
-from ..visibility import CLEAN_LEVEL, level_name
+from ..visibility import CLEAN_LEVEL, is_level_name, level_name
 from .errors import ConfigChangedError, DamagedManifestError, ForeignFolderError
 from .executors import SceneDone, connect_dask, start_executor
 from .folder import (
@@ -183,6 +183,8 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
             "files of scenes and levels no longer configured are deleted), or choose "
             "another --out."
         )
+    # Refusals come before any change to the folder.
+    _refuse_strays_and_blocked(plan, ledger, existing)
     # From here on the folder is ours and its config is the planned one.
     written_by = (existing or {}).get("seahaze_version")
     if written_by and written_by != __version__:
@@ -207,30 +209,6 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
             f"--force: the configuration changed ({len(changes)} difference(s)); deleted "
             f"{pruned} file(s) of scenes or levels no longer configured"
         )
-    strays = stray_files(root, set(ledger.status), {CLEAN_LEVEL, *level_names})
-    if strays:
-        more = f" and {len(strays) - 1} more" if len(strays) > 1 else ""
-        raise ForeignFolderError(
-            f"{root} holds files that are not this dataset's: {strays[0]}{more}. The COCO "
-            "files are built from every image and label in the level folders: move them out "
-            "of the folder (or delete them) and rerun"
-        )
-    blocked = next(
-        (
-            path
-            for job in plan.jobs
-            for path in ledger.layout.scene_files(
-                job.name, [level_name(v) for v in job.spec.haze.levels], job.spec.render.write_exr
-            )
-            if path.exists() and not path.is_file()
-        ),
-        None,
-    )
-    if blocked is not None:
-        raise ForeignFolderError(
-            f"{blocked} is not a file, but seahaze writes one there: move it out of the folder "
-            "and rerun"
-        )
     _mark_done_scenes(ledger, (existing or {}).get("scenes") or {}, planned["scenes"], reporter)
     pending = len(plan.jobs) - ledger.done_before
     if ledger.done_before and pending:
@@ -245,6 +223,57 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
         for level in [CLEAN_LEVEL, *level_names]:
             ledger.layout.coco(level).unlink(missing_ok=True)
     return ledger
+
+
+def _refuse_strays_and_blocked(
+    plan: BatchPlan, ledger: SceneLedger, existing: dict[str, Any] | None
+) -> None:
+    """Refuse images and labels in level folders that are neither planned nor listed by the
+    folder's manifest (the COCO writer reads every one), and a folder where a planned file
+    goes. Files the old manifest lists are the dataset's: ``--force`` may prune them."""
+    root = ledger.layout.root
+    old = existing or {}
+    scenes = {*ledger.status, *(old.get("scenes") or {})}
+    levels = {
+        CLEAN_LEVEL,
+        *(e["name"] for e in ledger.levels),
+        *(e["name"] for e in old.get("levels", [])),
+    }
+    strays = stray_files(root, scenes, levels)
+    if strays:
+        more = f" and {len(strays) - 1} more" if len(strays) > 1 else ""
+        raise ForeignFolderError(
+            f"{root} holds files that are not this dataset's: {strays[0]}{more}. The COCO "
+            "files are built from every image and label in the level folders: move them out "
+            "of the folder (or delete them) and rerun"
+        )
+    # The COCO writer takes every level-named folder under images/ as a level.
+    planned = {CLEAN_LEVEL, *(e["name"] for e in ledger.levels)}
+    listed = {e["name"] for e in old.get("levels", [])}
+    images = root / "images"
+    for folder in sorted(images.iterdir()) if images.is_dir() else ():
+        if folder.name in planned or not is_level_name(folder.name) or not folder.is_dir():
+            continue
+        kept = [
+            p
+            for p in sorted(folder.iterdir())
+            if not (folder.name in listed and p.suffix == ".png" and p.stem in scenes)
+        ]
+        if kept or folder.name not in listed:
+            what = kept[0].relative_to(root) if kept else folder.relative_to(root)
+            raise ForeignFolderError(
+                f"{root} holds {what}, in a level folder that is not this dataset's level "
+                f"and that seahaze did not write; the COCO files are built from every level "
+                "folder in images/: move it out of the folder and rerun"
+            )
+    for job in plan.jobs:
+        levels_of_job = [level_name(v) for v in job.spec.haze.levels]
+        for path in ledger.layout.scene_files(job.name, levels_of_job, job.spec.render.write_exr):
+            if path.exists() and not path.is_file():
+                raise ForeignFolderError(
+                    f"{path} is not a file, but seahaze writes one there: move it out of the "
+                    "folder and rerun"
+                )
 
 
 def _mark_done_scenes(
