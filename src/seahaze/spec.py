@@ -412,8 +412,8 @@ class HazeSpec(_Spec):
         min_length=1,
         max_length=MAX_LEVELS,
         description="Visibilities to render (`--vis` overrides); default the 11 graded levels. "
-        f"At most {MAX_LEVELS}, each a different whole number of metres (the level folders "
-        "`v0300`… carry whole metres).",
+        f"At most {MAX_LEVELS}, each within {MIN_LEVEL_M:g}..{MAX_LEVEL_M:g} m and a different "
+        "whole number of metres (the level folders `v0300`… carry whole metres).",
         json_schema_extra=_unit("m"),
     )
     threshold: Threshold = Field(

@@ -37,7 +37,7 @@ BOX_LAYER_WIDTHS = 3.0
 bottom). In dense haze the light reaches the camera by diffusing down through the layer, and
 light let in through the box's sides changes that field near the camera by about
 ``exp(−π W / H)`` (the slowest diffusion mode of a slab), not by ``exp(−σ W)``: with only
-``σ W = 8`` a `reference` render at V = 50 m was 4x too bright. ``3 H`` keeps it below 1e-4."""
+``σ W = 8`` a `reference` render at V = 50 m was 3-7x too bright. ``3 H`` keeps it below 1e-4."""
 
 
 def _mi():
