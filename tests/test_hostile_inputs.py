@@ -127,6 +127,16 @@ def test_files_that_are_not_scene_files(tmp_path):
     big.write_text("# padding\n" * 220_000)  # 2.2 MB of comments: valid YAML, too large
     loop = tmp_path / "loop.yaml"
     loop.symlink_to(loop)
+    (tmp_path / "zero.obj").symlink_to("/dev/zero")  # a mesh that would be read forever
+    with open(tmp_path / "huge.obj", "wb") as handle:  # sparse: 300 MiB that cost nothing
+        handle.truncate(300 << 20)
+    meshes = {}
+    for stem in ("zero", "huge"):
+        meshes[stem] = tmp_path / f"mesh_{stem}.yaml"
+        meshes[stem].write_text(
+            "vessels:\n  placed:\n    - {class: tug, distance_m: 500, "
+            f"mesh: {{path: {stem}.obj, scale_m: 30}}}}\n"
+        )
     cases = {
         "/dev/zero": "not a regular file",
         str(fifo): "not a regular file",
@@ -134,6 +144,8 @@ def test_files_that_are_not_scene_files(tmp_path):
         str(tmp_path): "is a folder",
         str(tmp_path / "missing.yaml"): "no such file",
         str(loop): "cannot read",
+        str(meshes["zero"]): "no such mesh file",
+        str(meshes["huge"]): "at most 256 MiB",
     }
     for path, words in cases.items():
         code, _, err = run(["validate", path])
@@ -316,4 +328,4 @@ def test_other_commands_refuse_bad_flags(args, tmp_path):
 
 def test_corpus_size_files_and_flags():
     """The issue asks for at least 150 bad inputs; files, special files and flags together."""
-    assert len(SCENE_FILES) + 6 + len(RENDER_FLAGS) + len(OTHER_COMMANDS) >= 250
+    assert len(SCENE_FILES) + 8 + len(RENDER_FLAGS) + len(OTHER_COMMANDS) >= 250

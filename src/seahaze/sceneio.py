@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import datetime
 import math
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, get_args, get_origin
@@ -373,6 +374,10 @@ def _resolve_user_meshes(
                 )
             )
             continue
+        size_problem = _mesh_file_problem(Path(path))
+        if size_problem:
+            problems.append(problem(size_problem))
+            continue
         if vessel.kind in CLASS_NAMES:  # an unknown class is reported by _check_vessel_classes
             try:
                 load_user_mesh(
@@ -397,6 +402,24 @@ def _resolve_user_meshes(
         placed[i] = vessel.model_copy(update={"mesh": resolved})
     vessels = spec.vessels.model_copy(update={"placed": placed})
     return problems, spec.model_copy(update={"vessels": vessels})
+
+
+MAX_MESH_BYTES = 256 << 20
+"""Largest user mesh file (256 MiB: a few million triangles)."""
+
+
+def _mesh_file_problem(path: Path) -> str | None:
+    """A user mesh must be a regular file of at most :data:`MAX_MESH_BYTES` (a symlink to
+    ``/dev/zero`` named ``hull.obj`` would be read forever)."""
+    try:
+        info = path.stat()
+    except OSError as exc:
+        return f"cannot read the mesh: {exc.strerror or exc}"
+    if not stat.S_ISREG(info.st_mode):
+        return "the mesh is not a regular file (a folder, device or FIFO)"
+    if info.st_size > MAX_MESH_BYTES:
+        return f"the mesh file is {info.st_size / 2**20:,.0f} MiB; at most 256 MiB"
+    return None
 
 
 def load_scene(path: str | Path) -> tuple[SceneSpec, str]:
