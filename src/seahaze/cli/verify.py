@@ -22,6 +22,10 @@ def cmd_verify(args: argparse.Namespace) -> int:
     from ..render.variant import VariantError
     from ..spec import SceneSpec
 
+    out = Path(args.out)
+    blocking = next((p for p in (out, *out.parents) if p.exists()), None)
+    if blocking is not None and not blocking.is_dir():
+        raise UsageError(f"--out {out}: {blocking} is a file, not a folder")
     levels = parse_vis(args.vis) or [verify.DEFAULT_VISIBILITY_M]
     resolution = verify.DEFAULT_RESOLUTION
     if args.resolution is not None:
@@ -60,7 +64,12 @@ def cmd_verify(args: argparse.Namespace) -> int:
     except (verify.VerifyInputError, VariantError, ValueError) as err:
         raise UsageError(str(err)) from None
     print(verify.format_report(report))
-    for path in verify.write_outputs(report, Path(args.out), measurements):
+    try:
+        written = verify.write_outputs(report, out, measurements)
+    except OSError as err:
+        print(f"seahaze: error: cannot write to {out}: {err}", file=sys.stderr)
+        return 3
+    for path in written:
         print(f"wrote {path}")
     return 0 if report.passed else 1
 
