@@ -46,13 +46,13 @@ CONFIRM_MEMORY_FRACTION = 0.8
 """A scene estimated to need more than this share of the machine's memory needs ``--yes``."""
 
 # measured by scripts/measure_cost_model.py (docs/benchmarks.md, "Cost model"); CPU seconds
-SETUP_CORE_S = {"low": 2.0, "medium": 6.0, "high": 20.0}
-CLEAN_CORE_S = 2.0e-6
-WRITE_CORE_S = 1.0e-6
-PHYSICAL_CORE_S = {50.0: 4.0e-6, 300.0: 3.0e-6, 4000.0: 3.0e-6}
-PHYSICAL_LEVEL_S = {50.0: 3.0, 300.0: 1.0, 4000.0: 1.0}
-REFERENCE_CORE_S = {50.0: 4.0e-5, 300.0: 1.0e-5, 4000.0: 5.0e-6}
-ASM_LEVEL_S = {50.0: 5.0, 300.0: 2.0, 4000.0: 1.0}
+SETUP_CORE_S = {"low": 3.52, "medium": 3.87, "high": 6.94}
+CLEAN_CORE_S = 6.25e-07
+WRITE_CORE_S = 1.48e-06
+PHYSICAL_CORE_S = 7.89e-07
+PHYSICAL_LEVEL_S = {50.0: 11.85, 300.0: 2.22, 4000.0: 0.78}
+REFERENCE_CORE_S = {50.0: 7.26e-06, 300.0: 1.03e-05, 4000.0: 6.32e-06}
+ASM_LEVEL_S = {50.0: 1.85, 300.0: 1.49, 4000.0: 1.33}
 
 VALIDATED_FROM_M = {"physical": 300.0, "asm": 300.0}
 """Thinnest visibility (m) at which each mode is within 3 % of converged ``reference`` renders
@@ -136,7 +136,7 @@ def scene_core_seconds(spec: SceneSpec) -> tuple[float, float]:
     mode = spec.render.mode
     for v in levels:
         if mode == "physical":
-            per, fixed = _interpolated(PHYSICAL_CORE_S, v), _interpolated(PHYSICAL_LEVEL_S, v)
+            per, fixed = PHYSICAL_CORE_S, _interpolated(PHYSICAL_LEVEL_S, v)
         elif mode == "reference":
             per, fixed = _interpolated(REFERENCE_CORE_S, v), 0.0
         else:
