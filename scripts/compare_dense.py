@@ -123,10 +123,12 @@ def write_section(results: dict, meta: dict, keys: list[str]) -> None:
         f"`{meta['variant']}`. References: `volpath` unbounded depth (Russian roulette), haze "
         f"box half-width {meta['box_half_width_m']:.0f} m, every region's mean to "
         f"{100 * meta['target_region_relative_stderr']:g} % (1 standard error) or the recorded "
-        "error (`scripts/make_dense_references.py`). Modes rendered through "
-        "`render_scene` (`scripts/compare_dense.py`): ratio of the region's mean luminance to "
-        f"the reference's; `physical` at {results['spp']} spp, mean of {results['seeds']} "
-        "seeds ± its standard error. Regions: thirds of the frame, and sky and sea pixels.",
+        "error (`scripts/make_dense_references.py`); the reference rows give the mean luminance "
+        "and its standard error. Modes rendered through `render_scene` "
+        "(`scripts/compare_dense.py`): ratio of the region's mean luminance to the "
+        f"reference's; `physical` at {results['spp']} spp, mean of {results['seeds']} seeds ± "
+        "its standard error; `asm` at the same spp; `reference (max_depth 64)`, the old "
+        "default depth, at 1024 spp. Regions: thirds of the frame, and sky and sea pixels.",
         "",
         "| V | mode | " + " | ".join(regions) + " |",
         "|---|---|" + "---|" * len(regions),
@@ -136,7 +138,7 @@ def write_section(results: dict, meta: dict, keys: list[str]) -> None:
         v = meta["levels"][key]["visibility_m"]
         ref = entry["reference"]
         cells = [
-            f"{1e3 * ref[r]['mean']:.3f}e-3 ± {100 * ref[r]['relative_stderr']:.1f} %"
+            f"{ref[r]['mean']:.4f} ± {100 * ref[r]['relative_stderr']:.1f} %"
             for r in regions
             if r in ref
         ]

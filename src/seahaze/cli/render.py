@@ -102,18 +102,16 @@ def _check_layouts(plan: Any) -> None:
 
 def _warn_below_validated_range(plan: Any) -> None:
     """A warning for levels thinner than the mode's validated range (docs/physics.md)."""
-    first = plan.jobs[0].spec
-    mode = first.render.mode
-    floor = limits.VALIDATED_FROM_M.get(mode)
-    below = sorted(v for v in plan.levels if floor is not None and v < floor)
-    if below:
-        print(
-            f"seahaze: warning: the {mode} mode is validated down to V = {floor:g} m "
-            f"(docs/physics.md, within 3 % of converged references); "
-            f"{', '.join(f'{v:g}' for v in below)} m lie below it"
-            + ("; --mode reference is unbiased there but slow" if mode != "reference" else ""),
-            file=sys.stderr,
-        )
+    for mode in sorted({job.spec.render.mode for job in plan.jobs}):
+        floor = limits.VALIDATED_FROM_M.get(mode)
+        below = sorted(v for v in plan.levels if floor is not None and v < floor)
+        if below:
+            print(
+                f"seahaze: warning: the {mode} mode is validated (within 3 % of converged "
+                f"references) down to V = {floor:g} m; {', '.join(f'{v:g}' for v in below)} m "
+                "lie below it (docs/physics.md); --mode reference is unbiased there but slow",
+                file=sys.stderr,
+            )
 
 
 def _confirm(
