@@ -15,7 +15,7 @@ if ! have_llvm; then
     DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libllvm19 >/dev/null
   else
     echo "[bootstrap] warning: libLLVM 19 not found and cannot apt-get install it;" \
-         "seahaze will fall back to the slow scalar_rgb variant" >&2
+         "seahaze cannot render without it (or an NVIDIA GPU); install libllvm19" >&2
   fi
 fi
 

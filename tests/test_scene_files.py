@@ -35,7 +35,7 @@ BAD_SCENES = [
     ("sun:\n  elevation_deg: 95\n", 2, "sun.elevation_deg", ["less than or equal", "89.5"]),
     ("haze:\n  threshold: fog\n", 2, "haze.threshold", ["koschmieder", "mor"]),
     ("haze:\n  albedo: 1.5\n", 2, "haze.albedo", ["less than or equal to 1"]),
-    ("haze:\n  levels: [300, -1]\n", 2, "haze.levels[1]", ["greater than 0"]),
+    ("haze:\n  levels: [300, -1]\n", 2, "haze.levels[1]", ["greater than or equal to 10"]),
     (
         "camera:\n  resolution: [640]\n",
         2,

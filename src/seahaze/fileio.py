@@ -50,7 +50,26 @@ def write_exr(path: str | Path, channels: dict[str, np.ndarray]) -> None:
         name: np.ascontiguousarray(values, dtype=np.float32) for name, values in channels.items()
     }
     with atomic_target(Path(path)) as tmp, OpenEXR.File(header, data) as exr:
-        exr.write(str(tmp))
+        try:
+            exr.write(str(tmp))
+        except RuntimeError as err:
+            # OpenEXR reports a failed write (full disk, quota, I/O error) as RuntimeError;
+            # as an OSError the batch stops on it like on any other write error.
+            raise _exr_write_error(Path(path), err) from err
+
+
+def _exr_write_error(path: Path, err: RuntimeError) -> OSError:
+    """The OSError of a failed EXR write: ENOSPC when the disk is full, else EIO."""
+    import errno
+
+    code = errno.EIO
+    try:
+        stats = os.statvfs(path.parent)
+        if stats.f_bavail * stats.f_frsize < (1 << 20):
+            code = errno.ENOSPC
+    except OSError:
+        pass
+    return OSError(code, f"{os.strerror(code)} (OpenEXR: {str(err).strip()})", str(path))
 
 
 def write_rgb_exr(path: str | Path, radiance: np.ndarray) -> None:
@@ -76,3 +95,132 @@ def write_text(path: Path, text: str) -> None:
 def write_json(path: Path, data: Any) -> None:
     """Write JSON atomically, keys in their given order, 2-space indent, no NaN or infinity."""
     write_text(path, json.dumps(data, indent=2, sort_keys=False, allow_nan=False) + "\n")
+
+
+# Cheap checks of finished files: a resumed batch verifies what it skips (docs/batches.md).
+# Each reads a file's header and, for PNG and EXR, enough of its end to see that it is complete;
+# each returns None for a good file and a short reason otherwise.
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+_PNG_IEND = b"\x00\x00\x00\x00IEND\xaeB`\x82"
+EXR_MAGIC = b"\x76\x2f\x31\x01"
+_EXR_LINES_PER_CHUNK = {0: 1, 1: 1, 2: 1, 3: 16, 4: 32, 5: 16, 6: 32, 7: 32, 8: 32, 9: 256}
+"""OpenEXR compression code → scanlines per chunk (NO, RLE, ZIPS, ZIP, PIZ, PXR24, B44, B44A,
+DWAA, DWAB)."""
+
+
+def _read_ends(path: Path, head: int, tail: int) -> tuple[bytes, bytes, int]:
+    with open(path, "rb") as handle:
+        size = os.fstat(handle.fileno()).st_size
+        first = handle.read(head)
+        handle.seek(max(size - tail, 0))
+        last = handle.read(tail)
+    return first, last, size
+
+
+def check_png(path: Path, size: tuple[int, int]) -> str | None:
+    """Whether ``path`` is a complete 8-bit RGB PNG of ``size`` (width, height)."""
+    try:
+        head, tail, length = _read_ends(path, 33, 12)
+    except OSError as err:
+        return f"cannot be read ({err.strerror or err})"
+    if length == 0:
+        return "is empty"
+    if head[:8] != PNG_SIGNATURE or head[12:16] != b"IHDR":
+        return "is not a PNG"
+    width, height = int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+    if (width, height) != tuple(size):
+        return f"is {width}x{height}, not {size[0]}x{size[1]}"
+    if head[24] != 8 or head[25] != 2:
+        return "is not 8-bit RGB"
+    if tail != _PNG_IEND:
+        return "is truncated"
+    return None
+
+
+def check_exr(path: Path, size: tuple[int, int], channels: set[str]) -> str | None:
+    """Whether ``path`` is a complete scanline OpenEXR of ``size`` with exactly ``channels``:
+    the header is parsed and the last chunk must end where the file ends."""
+    try:
+        with open(path, "rb") as handle:
+            length = os.fstat(handle.fileno()).st_size
+            if length == 0:
+                return "is empty"
+            return _check_exr(handle, length, size, channels)
+    except OSError as err:
+        return f"cannot be read ({err.strerror or err})"
+
+
+def _check_exr(handle: Any, length: int, size: tuple[int, int], channels: set[str]) -> str | None:
+    import struct
+
+    head = handle.read(min(length, 1 << 16))
+    if head[:4] != EXR_MAGIC:
+        return "is not an OpenEXR file"
+    if head[5] & 0x1A:  # tiled (0x200), deep (0x800) or multi-part (0x1000): not seahaze's
+        return "is not a single-part scanline OpenEXR file"
+    pos, attrs = 8, {}
+    while True:
+        end = head.find(b"\x00", pos)
+        if end < 0:
+            return "has a truncated header"
+        name = head[pos:end].decode("latin-1")
+        pos = end + 1
+        if not name:
+            break
+        end = head.find(b"\x00", pos)
+        if end < 0 or end + 5 > len(head):
+            return "has a truncated header"
+        kind = head[pos:end].decode("latin-1")
+        (n,) = struct.unpack_from("<i", head, end + 1)
+        pos = end + 5
+        if n < 0 or pos + n > len(head):
+            return "has a truncated header"
+        attrs[name] = (kind, head[pos : pos + n])
+        pos += n
+    try:
+        xmin, ymin, xmax, ymax = struct.unpack("<4i", attrs["dataWindow"][1])
+        compression = attrs["compression"][1][0]
+        chlist = attrs["channels"][1]
+    except (KeyError, IndexError, struct.error):
+        return "has an incomplete header"
+    width, height = xmax - xmin + 1, ymax - ymin + 1
+    if (width, height) != tuple(size):
+        return f"is {width}x{height}, not {size[0]}x{size[1]}"
+    found, at = set(), 0
+    while at < len(chlist) and chlist[at] != 0:  # name, then 16 bytes of type and sampling
+        end = chlist.find(b"\x00", at)
+        if end < 0:
+            return "has a damaged channel list"
+        found.add(chlist[at:end].decode("latin-1"))
+        at = end + 17
+    if found != channels:
+        return f"has channels {sorted(found)}, not {sorted(channels)}"
+    lines = _EXR_LINES_PER_CHUNK.get(compression)
+    if lines is None:
+        return f"has unknown compression {compression}"
+    chunks = -(-height // lines)
+    handle.seek(pos)
+    table = handle.read(8 * chunks)
+    if len(table) < 8 * chunks:
+        return "is truncated"
+    offsets = struct.unpack(f"<{chunks}Q", table)
+    last = max(offsets)
+    if min(offsets) < pos + 8 * chunks or last + 8 > length:
+        return "is truncated"
+    handle.seek(last)
+    _y, data_size = struct.unpack("<2i", handle.read(8))
+    if last + 8 + data_size != length:
+        return "is truncated"
+    return None
+
+
+def check_json(path: Path) -> str | None:
+    """Whether ``path`` holds a JSON object (the meta files; at most a few kB)."""
+    try:
+        data = json.loads(Path(path).read_bytes())
+    except OSError as err:
+        return f"cannot be read ({err.strerror or err})"
+    except (ValueError, RecursionError):
+        return "is not valid JSON"
+    return None if isinstance(data, dict) else "is not a JSON object"

@@ -5,7 +5,6 @@ What a user looks at first after a render: ``seahaze preview OUT``.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from PIL import Image, ImageDraw
@@ -21,18 +20,36 @@ class PreviewError(ValueError):
     """A dataset folder that cannot be previewed; the message is for the user."""
 
 
-def dataset_levels(root: Path) -> list[str]:
-    """Level folder names of a dataset in manifest order, clean first."""
+def _manifest(root: Path) -> dict:
+    """The dataset's manifest; a :class:`PreviewError` for a missing, foreign or damaged one."""
+    from .batch.errors import BatchRefusedError
+    from .batch.folder import inspect_folder
+
     manifest = root / "dataset.json"
     if not manifest.exists():
         raise PreviewError(f"{manifest}: not found; is {root} a seahaze dataset folder?")
-    data = json.loads(manifest.read_text())
-    return [CLEAN_LEVEL, *(level["name"] for level in data["levels"])]
+    try:
+        state = inspect_folder(root)
+    except BatchRefusedError as err:
+        raise PreviewError(str(err)) from None
+    if state.manifest is None:
+        raise PreviewError(f"{manifest} is damaged ({state.damaged})")
+    return state.manifest
+
+
+def dataset_levels(root: Path) -> list[str]:
+    """Level folder names of a dataset in manifest order, clean first."""
+    return [CLEAN_LEVEL, *(level["name"] for level in _manifest(root)["levels"])]
 
 
 def _read_boxes(
     path: Path, width: int, height: int
 ) -> list[tuple[int, float, float, float, float]]:
+    from .batch.folder import check_label
+
+    problem = check_label(path)
+    if problem is not None:
+        raise PreviewError(f"{path} {problem}")
     boxes = []
     for line in path.read_text().splitlines():
         cls, cx, cy, w, h = line.split()[:5]
@@ -47,7 +64,10 @@ def _tile(
     path = layout.image(level, scene)
     if not path.exists():
         raise PreviewError(f"{path}: not found")
-    image = Image.open(path).convert("RGB")
+    try:
+        image = Image.open(path).convert("RGB")
+    except (OSError, ValueError) as err:  # PIL: truncated, not an image, decompression bomb
+        raise PreviewError(f"{path}: cannot read the image ({err})") from None
     scale = tile_width / image.width
     tile = image.resize((tile_width, round(image.height * scale)), Image.LANCZOS)
     draw = ImageDraw.Draw(tile)
@@ -86,7 +106,7 @@ def contact_sheet(
     unknown = [lv for lv in levels if lv not in available]
     if unknown:
         raise PreviewError(f"level(s) {unknown} not in {root}; available: {', '.join(available)}")
-    manifest = json.loads((root / "dataset.json").read_text())
+    manifest = _manifest(root)
     scenes = list(manifest["scenes"])
     if not scenes:
         raise PreviewError(f"{root}: no rendered scene yet")

@@ -3,20 +3,29 @@
 Every problem is reported at once, each with ``file:line``, the dotted field and what is
 allowed, so a user fixes a file in one pass. Unknown keys and duplicate keys are errors.
 User mesh files named by the scene are found, read and checked here too, and their paths made
-absolute in the returned spec, so a bad file is a located message, never a traceback later.
+absolute in the returned spec, so a bad file is a located message, never a traceback later;
+so is a vessel layout that cannot be built (a vessel over the camera, two on one spot, a
+sampler that cannot fit its vessels).
+
+Hostile files are refused before they cost anything (:mod:`seahaze.yamlguard`,
+docs/limits.md): a scene file is a regular file of at most 1 MiB, its YAML nests at most 32
+levels, and its aliases neither refer to themselves nor expand beyond 20,000 nodes.
 """
 
 from __future__ import annotations
 
+import datetime
 import math
+import stat
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, get_args, get_origin
 
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from .spec import SceneSpec, field_bounds, model_in
+from .spec import BOUND_KINDS, SceneSpec, field_bounds, model_in
+from .yamlguard import MAX_SCENE_BYTES, YamlLimitError, compose_limited, read_limited_text
 
 Loc = tuple[str | int, ...]
 
@@ -35,6 +44,10 @@ class Problem:
         return f"{where}: {self.field or '(file)'}: {self.message}"
 
 
+MAX_PROBLEMS = 20
+"""Most problems reported per file (a file of 20,000 unknown keys gets 20 lines and a count)."""
+
+
 class SceneFileError(Exception):
     """A scene file that cannot be used; ``problems`` lists every issue found."""
 
@@ -46,21 +59,25 @@ class SceneFileError(Exception):
 def _index_lines(
     node: yaml.Node, loc: Loc, lines: dict[Loc, int], dupes: list[tuple[Loc, int]]
 ) -> None:
-    """Record the 1-based line of every mapping key and sequence item, and duplicate keys."""
-    lines.setdefault(loc, node.start_mark.line + 1)
-    if isinstance(node, yaml.MappingNode):
-        seen: set[str] = set()
-        for key_node, value_node in node.value:
-            key = str(key_node.value)
-            child = (*loc, key)
-            if key in seen:
-                dupes.append((child, key_node.start_mark.line + 1))
-            seen.add(key)
-            lines[child] = key_node.start_mark.line + 1
-            _index_lines(value_node, child, lines, dupes)
-    elif isinstance(node, yaml.SequenceNode):
-        for i, item in enumerate(node.value):
-            _index_lines(item, (*loc, i), lines, dupes)
+    """Record the 1-based line of every mapping key and sequence item, and duplicate keys.
+
+    Iterative, so its depth is no limit (:mod:`seahaze.yamlguard` has bounded the node count)."""
+    stack: list[tuple[yaml.Node, Loc]] = [(node, loc)]
+    while stack:
+        node, loc = stack.pop()
+        lines.setdefault(loc, node.start_mark.line + 1)
+        if isinstance(node, yaml.MappingNode):
+            seen: set[str] = set()
+            for key_node, value_node in node.value:
+                key = str(key_node.value)
+                child = (*loc, key)
+                if key in seen:
+                    dupes.append((child, key_node.start_mark.line + 1))
+                seen.add(key)
+                lines[child] = key_node.start_mark.line + 1
+                stack.append((value_node, child))
+        elif isinstance(node, yaml.SequenceNode):
+            stack += [(item, (*loc, i)) for i, item in enumerate(node.value)]
 
 
 def _line_for(loc: Loc, lines: dict[Loc, int]) -> int:
@@ -94,11 +111,14 @@ def _allowed(loc: Loc) -> str:
     if info is None:
         return ""
     symbols = {"ge": ">=", "gt": ">", "le": "<=", "lt": "<"}
+    found = field_bounds(info)
+    if loc and isinstance(loc[-1], int):
+        found = _item_bounds(info.annotation, loc[-1]) or found
     bounds = [
         f"{symbols[kind]} {value:g}"
         if isinstance(value, float | int)
         else f"{symbols[kind]} {value}"
-        for kind, value in field_bounds(info)
+        for kind, value in found
     ]
     extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
     unit = extra.get("unit")
@@ -108,6 +128,23 @@ def _allowed(loc: Loc) -> str:
     if unit and unit != "1":
         parts.append(f"in {unit}")
     return f" (allowed: {', '.join(parts)})" if parts else ""
+
+
+def _item_bounds(annotation: Any, index: int) -> list[tuple[str, Any]]:
+    """The bounds of item ``index`` of a ``list[Annotated[...]]`` or ``tuple[Annotated, ...]``
+    field (such as ``haze.levels`` or ``camera.resolution``)."""
+    args = [a for a in get_args(annotation) if a is not type(None)]
+    if get_origin(annotation) is tuple:
+        args = args[index : index + 1]
+    elif get_origin(annotation) is not list:
+        return []
+    return [
+        (kind, getattr(bound, kind))
+        for meta in getattr(args[0] if args else None, "__metadata__", ())
+        for bound in getattr(meta, "metadata", [meta])
+        for kind in BOUND_KINDS
+        if getattr(bound, kind, None) is not None
+    ]
 
 
 def _dotted(loc: Loc) -> str:
@@ -134,7 +171,10 @@ def _problems_from_validation(
     err: ValidationError, file: str, lines: dict[Loc, int]
 ) -> list[Problem]:
     problems = []
-    for item in err.errors():
+    # A file of thousands of unknown keys gets thousands of errors: only the first are located
+    # (MAX_PROBLEMS are shown), the count of the others is kept.
+    errors = err.errors(include_url=False)
+    for item in errors[: 5 * MAX_PROBLEMS]:
         loc = tuple(
             p for p in item["loc"] if not (isinstance(p, str) and p.startswith("function-"))
         )
@@ -153,24 +193,30 @@ def _problems_from_validation(
             message = item["msg"].replace("Value error, ", "") + _allowed(loc)
         problems.append(Problem(file, _line_for(loc, lines), _dotted(loc), message))
     # Several union branches can report the same place; keep one message per place and text.
-    return list(dict.fromkeys(problems))
+    problems = list(dict.fromkeys(problems))
+    if len(errors) > 5 * MAX_PROBLEMS:
+        problems.append(Problem(file, 0, "", f"… and {len(errors) - 5 * MAX_PROBLEMS} more"))
+    return problems
 
 
 def _reject_non_finite(data: Any, loc: Loc, lines: dict[Loc, int], file: str) -> list[Problem]:
-    """YAML accepts .nan and .inf as floats; no scene field means them."""
-    if isinstance(data, float) and not math.isfinite(data):
-        return [
-            Problem(file, _line_for(loc, lines), _dotted(loc), f"{data} is not a finite number")
-        ]
-    if isinstance(data, dict):
-        return [
-            p for k, v in data.items() for p in _reject_non_finite(v, (*loc, str(k)), lines, file)
-        ]
-    if isinstance(data, list):
-        return [
-            p for i, v in enumerate(data) for p in _reject_non_finite(v, (*loc, i), lines, file)
-        ]
-    return []
+    """YAML accepts .nan and .inf as floats, and dates and !!binary as values; no scene field
+    means them. Iterative: the structure's depth is bounded but need not be small."""
+    problems, stack = [], [(data, loc)]
+    while stack and len(problems) < MAX_PROBLEMS:
+        item, where = stack.pop()
+        message = None
+        if isinstance(item, float) and not math.isfinite(item):
+            message = f"{item} is not a finite number"
+        elif isinstance(item, bytes | datetime.date | set):
+            message = f"a YAML {type(item).__name__} value; write a plain number or string"
+        elif isinstance(item, dict):
+            stack += [(v, (*where, str(k))) for k, v in item.items()]
+        elif isinstance(item, list):
+            stack += [(v, (*where, i)) for i, v in enumerate(item)]
+        if message:
+            problems.append(Problem(file, _line_for(where, lines), _dotted(where), message))
+    return problems
 
 
 def parse_scene_text(
@@ -182,13 +228,9 @@ def parse_scene_text(
     working directory), then in the repository's ``assets/``.
     """
     try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = mark.line + 1 if mark is not None else 0
-        reason = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise SceneFileError([Problem(file, line, "", f"not valid YAML: {reason}")]) from None
+        data, node = compose_limited(text)
+    except YamlLimitError as exc:
+        raise SceneFileError([Problem(file, exc.line, "", exc.message)]) from None
     if data is None:
         data = {}
     if not isinstance(data, dict):
@@ -213,8 +255,18 @@ def parse_scene_text(
         problems += _check_vessel_classes(spec, file, lines)
         mesh_problems, spec = _resolve_user_meshes(spec, file, lines, base_dir)
         problems += mesh_problems
+    if spec is not None and not problems:
+        problems += [
+            Problem(file, _line_for(loc, lines), _dotted(loc), message)
+            for loc, message in layout_problems(spec)
+        ]
     if problems:
-        raise SceneFileError(sorted(problems, key=lambda p: p.line))
+        problems = sorted(problems, key=lambda p: (p.message.startswith("…"), p.line))
+        if len(problems) > MAX_PROBLEMS:
+            more = len(problems) - MAX_PROBLEMS
+            rest = Problem(file, 0, "", f"… and {more} more problem(s)")
+            problems = [*problems[:MAX_PROBLEMS], rest]
+        raise SceneFileError(problems)
     assert spec is not None
     return spec
 
@@ -258,6 +310,27 @@ def _check_vessel_classes(spec: SceneSpec, file: str, lines: dict[Loc, int]) -> 
                 )
             )
     return problems
+
+
+def layout_problems(spec: SceneSpec) -> list[tuple[Loc, str]]:
+    """Whether the vessel layout of ``spec`` (with its ``render.seed``) can be built: a vessel
+    over the camera, two on one spot or a sampler that cannot fit its vessels would otherwise
+    fail the render. Returns ``(location, message)`` pairs; the layout is cheap (no meshes
+    but the user meshes, which are small)."""
+    from .camera import Camera
+    from .world import layout_vessels
+
+    if not spec.vessels.placed and (spec.vessels.sample is None or not spec.vessels.sample.count):
+        return []
+    try:
+        layout_vessels(spec, Camera.from_spec(spec.camera))
+    except (ValueError, FileNotFoundError) as exc:  # LayoutError is a ValueError
+        text = str(exc).strip().splitlines()
+        message = text[0] if text else type(exc).__name__
+        sample_failed = message.startswith("could not place vessel")
+        loc: Loc = ("vessels", "sample") if sample_failed else ("vessels", "placed")
+        return [(loc, f"the vessels cannot be laid out: {message}")]
+    return []
 
 
 def _resolve_user_meshes(
@@ -305,6 +378,10 @@ def _resolve_user_meshes(
                 )
             )
             continue
+        size_problem = _mesh_file_problem(Path(path))
+        if size_problem:
+            problems.append(problem(size_problem))
+            continue
         if vessel.kind in CLASS_NAMES:  # an unknown class is reported by _check_vessel_classes
             try:
                 load_user_mesh(
@@ -331,6 +408,24 @@ def _resolve_user_meshes(
     return problems, spec.model_copy(update={"vessels": vessels})
 
 
+MAX_MESH_BYTES = 256 << 20
+"""Largest user mesh file (256 MiB: a few million triangles)."""
+
+
+def _mesh_file_problem(path: Path) -> str | None:
+    """A user mesh must be a regular file of at most :data:`MAX_MESH_BYTES` (a symlink to
+    ``/dev/zero`` named ``hull.obj`` would be read forever)."""
+    try:
+        info = path.stat()
+    except OSError as exc:
+        return f"cannot read the mesh: {exc.strerror or exc}"
+    if not stat.S_ISREG(info.st_mode):
+        return "the mesh is not a regular file (a folder, device or FIFO)"
+    if info.st_size > MAX_MESH_BYTES:
+        return f"the mesh file is {info.st_size / 2**20:,.0f} MiB; at most 256 MiB"
+    return None
+
+
 def load_scene(path: str | Path) -> tuple[SceneSpec, str]:
     """Load and validate a scene file; returns the spec and the scene name.
 
@@ -338,10 +433,8 @@ def load_scene(path: str | Path) -> tuple[SceneSpec, str]:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SceneFileError([Problem(str(path), 0, "", "no such file")]) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneFileError([Problem(str(path), 0, "", f"cannot read: {exc}")]) from None
+        text = read_limited_text(path, MAX_SCENE_BYTES, "a scene file", "a scene is a YAML file")
+    except YamlLimitError as exc:
+        raise SceneFileError([Problem(str(path), exc.line, "", exc.message)]) from None
     spec = parse_scene_text(text, str(path), path.parent)
     return spec, spec.name or path.stem

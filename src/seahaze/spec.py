@@ -11,13 +11,24 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Annotated, Any, Literal, get_args
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 from pydantic.fields import FieldInfo
 
-from .visibility import GRADED_LEVELS_M, ExtinctionSpectrum, Threshold
+from .visibility import (
+    GRADED_LEVELS_M,
+    MAX_LEVEL_M,
+    MAX_LEVELS,
+    MIN_LEVEL_M,
+    ExtinctionSpectrum,
+    Threshold,
+    level_name_clash,
+)
 
 BOUND_KINDS = ("ge", "gt", "le", "lt")
 """The numeric constraints a field may carry, as pydantic names them."""
+MAX_PLACED_VESSELS = 200
+"""Most explicit vessels per scene: each is a mesh in the render and a box to label
+(docs/limits.md); 3000 buoys validated in 3 s and then rendered for minutes."""
 
 
 def model_in(annotation: Any) -> type[BaseModel] | None:
@@ -194,7 +205,9 @@ class SeaSpec(_Spec):
     time_s: float = Field(
         0.0,
         ge=0.0,
-        description="Time of the wave field; sequences advance it consistently.",
+        le=1.0e6,
+        description="Time of the wave field; sequences advance it consistently (at most about "
+        "11.6 days: the wave phases ω·t keep their precision).",
         json_schema_extra=_unit("s"),
     )
     seed: int | None = Field(
@@ -248,6 +261,7 @@ class UserMeshSpec(_Spec):
 
     path: str = Field(
         min_length=1,
+        max_length=4096,
         description="Mesh file (.obj .ply .glb .gltf .stl): absolute, relative to the scene "
         "file's folder, or relative to the repository's `assets/` folder.",
     )
@@ -344,7 +358,7 @@ class VesselSampler(_Spec):
     service-speed range (buoys moored)."""
 
     count: int = Field(5, ge=0, le=100, description="Number of vessels.")
-    classes: dict[str, Annotated[float, Field(gt=0.0)]] | None = Field(
+    classes: dict[str, Annotated[float, Field(gt=0.0, le=1.0e6)]] | None = Field(
         None, description="Class mix as relative weights; default all classes equally."
     )
     distance_m: tuple[Annotated[float, Field(gt=10.0)], Annotated[float, Field(le=50000.0)]] = (
@@ -392,7 +406,9 @@ class VesselsSpec(_Spec):
     """Vessels in the scene: an explicit list, a sampler, or both."""
 
     placed: list[PlacedVessel] = Field(
-        default_factory=list, description="Vessels at explicit places."
+        default_factory=list,
+        max_length=MAX_PLACED_VESSELS,
+        description=f"Vessels at explicit places (at most {MAX_PLACED_VESSELS}).",
     )
     sample: VesselSampler | None = Field(
         None, description="Vessels drawn at random (added to `placed`)."
@@ -412,9 +428,13 @@ class VesselsSpec(_Spec):
 class HazeSpec(_Spec):
     """The homogeneous haze layer whose extinction is set by the visibility of each level."""
 
-    levels: list[Annotated[float, Field(gt=0.0, le=1.0e6)]] = Field(
+    levels: list[Annotated[float, Field(ge=MIN_LEVEL_M, le=MAX_LEVEL_M)]] = Field(
         default_factory=lambda: [float(v) for v in GRADED_LEVELS_M],
-        description="Visibilities to render (`--vis` overrides); default the 11 graded levels.",
+        min_length=1,
+        max_length=MAX_LEVELS,
+        description="Visibilities to render (`--vis` overrides); default the 11 graded levels. "
+        f"At most {MAX_LEVELS}, each within {MIN_LEVEL_M:g}..{MAX_LEVEL_M:g} m and a different "
+        "whole number of metres (the level folders `v0300`… carry whole metres).",
         json_schema_extra=_unit("m"),
     )
     threshold: Threshold = Field(
@@ -452,6 +472,14 @@ class HazeSpec(_Spec):
         json_schema_extra=_unit("m"),
     )
 
+    @field_validator("levels")
+    @classmethod
+    def _distinct_level_names(cls, levels: list[float]) -> list[float]:
+        clash = level_name_clash(levels)
+        if clash:
+            raise ValueError(clash)
+        return levels
+
 
 class LabelsSpec(_Spec):
     """Which vessels get a box."""
@@ -470,6 +498,10 @@ class LabelsSpec(_Spec):
         description="Smallest visible share of a vessel's unoccluded pixels that is labelled.",
         json_schema_extra=_unit("1"),
     )
+
+
+EXPOSURE_RANGE = (1.0e-3, 1.0e3)
+"""Allowed fixed ``render.exposure``; ``auto`` gives about 3–6 under the physical sun and sky."""
 
 
 class RenderSpec(_Spec):
@@ -495,17 +527,19 @@ class RenderSpec(_Spec):
         description="Master seed: sampling noise, and the sea and layout when they have no "
         "seed of their own (`--seed` overrides).",
     )
-    variant: str = Field(
+    variant: Literal["auto", "cuda_ad_rgb", "llvm_ad_rgb"] = Field(
         "auto",
-        description="Mitsuba variant: `auto` (cuda, then llvm, then scalar) or a name such as "
-        "`llvm_ad_rgb`.",
+        description="Mitsuba variant: `auto` (`cuda_ad_rgb` where a GPU works, else "
+        "`llvm_ad_rgb`), `cuda_ad_rgb` or `llvm_ad_rgb` (no other variant can render seahaze's "
+        "passes).",
     )
     max_depth: int = Field(
-        64,
+        -1,
         ge=-1,
         le=4096,
-        description="Longest light path of the `reference` mode (-1: unbounded, Russian "
-        "roulette only).",
+        description="Longest light path of Mitsuba `volpath` (the `reference` levels and the "
+        "`asm` airlight): -1 unbounded, ended by Russian roulette only (unbiased). A bound "
+        "truncates the many scattering events of dense haze: 64 made V = 50 m 2.3x too dark.",
     )
     airlight_spp: int = Field(
         1024,
@@ -515,10 +549,22 @@ class RenderSpec(_Spec):
     )
     exposure: float | Literal["auto"] = Field(
         "auto",
-        description="Linear exposure applied before sRGB encoding; `auto` maps the clean "
-        "image's horizon sky to 0.6.",
+        description="Linear exposure applied before sRGB encoding, within 0.001..1000 (0 or "
+        "less is black, 1e300 white); `auto` maps the clean image's horizon sky to 0.6 (about "
+        "3–6 under the physical sun and sky).",
     )
     write_exr: bool = Field(True, description="Also write linear radiance as EXR for every image.")
+
+    @field_validator("exposure")
+    @classmethod
+    def _exposure_in_range(cls, value: float | str) -> float | str:
+        low, high = EXPOSURE_RANGE
+        if value != "auto" and not low <= float(value) <= high:
+            raise ValueError(
+                f"exposure must be 'auto' or within {low:g}..{high:g}, got {value:g} "
+                "(0 or less gives a black image, a huge value a white one)"
+            )
+        return value
 
 
 _AngleEnd = Annotated[float, Field(ge=-360.0, le=360.0)]
@@ -611,6 +657,9 @@ class OverrideError(ValueError):
 
 RENDER_MODES: tuple[str, ...] = get_args(RenderSpec.model_fields["mode"].annotation)
 """The hazy-level renderers, in the order the CLI lists them."""
+MITSUBA_VARIANTS: tuple[str, ...] = get_args(RenderSpec.model_fields["variant"].annotation)[1:]
+"""The Mitsuba variants seahaze renders with, in the order ``auto`` tries them
+(:mod:`seahaze.render.variant`)."""
 
 
 def with_changes(spec: SceneSpec, changes: Mapping[str, Any]) -> SceneSpec:

@@ -198,9 +198,36 @@ CLEAN_LEVEL = "clean"
 _LEVEL_NAME = re.compile(r"^v(\d+)$")
 
 
+MIN_LEVEL_M = 10.0
+"""Thinnest visibility a level may have (m): below it a 300 m layer is more than 100 optical
+depths thick and the frame is uniform fog (docs/limits.md)."""
+MAX_LEVEL_M = 1.0e6
+"""Clearest visibility a level may have (m)."""
+MAX_LEVELS = 64
+"""Most hazy levels per scene (the paper has 11); each costs a render."""
+
+
 def level_name(visibility_m: float) -> str:
-    """Folder name of a level: ``v`` plus the metres, zero-padded to 4 digits (``v0300``)."""
+    """Folder name of a level: ``v`` plus the metres, zero-padded to 4 digits (``v0300``).
+
+    Names carry whole metres, so two levels less than a metre apart could share a folder:
+    :func:`level_name_clash` finds them and every entry point refuses them.
+    """
     return f"v{round(visibility_m):04d}"
+
+
+def level_name_clash(visibilities_m: list[float] | tuple[float, ...]) -> str | None:
+    """A one-line message when two levels get the same folder name (else None)."""
+    seen: dict[str, float] = {}
+    for v in visibilities_m:
+        name = level_name(v)
+        if name in seen:
+            return (
+                f"levels {seen[name]:g} and {v:g} m would share the folder {name} (level names "
+                "carry whole metres); give each level a different whole number of metres"
+            )
+        seen[name] = v
+    return None
 
 
 def is_level_name(name: str) -> bool:
@@ -222,8 +249,11 @@ def _positive(text: str, spec: str) -> float:
         value = float(text)
     except ValueError:
         raise VisSelectionError(f"--vis {spec!r}: {text!r} is not a number of metres") from None
-    if not math.isfinite(value) or value <= 0:
-        raise VisSelectionError(f"--vis {spec!r}: visibility must be > 0 m, got {text}")
+    if not math.isfinite(value) or not MIN_LEVEL_M <= value <= MAX_LEVEL_M:
+        raise VisSelectionError(
+            f"--vis {spec!r}: visibility must be within {MIN_LEVEL_M:g}..{MAX_LEVEL_M:g} m, "
+            f"got {text}"
+        )
     return value
 
 
@@ -243,9 +273,11 @@ def parse_vis_selection(spec: str) -> list[float]:
         if lo > hi:
             raise VisSelectionError(f"--vis {spec!r}: range is reversed ({lo:g} > {hi:g})")
         if match[3] is not None:
+            if len(match[3]) > 6 or not 1 <= int(match[3]) <= MAX_LEVELS:
+                raise VisSelectionError(
+                    f"--vis {spec!r}: the level count must be within 1..{MAX_LEVELS}"
+                )
             count = int(match[3])
-            if count < 1:
-                raise VisSelectionError(f"--vis {spec!r}: the level count must be >= 1")
             if count == 1:
                 return [float(round(lo))]
             values = np.geomspace(lo, hi, count)
@@ -268,4 +300,10 @@ def parse_vis_selection(spec: str) -> list[float]:
     parts = [p.strip() for p in text.split(",")]
     if any(not p for p in parts):
         raise VisSelectionError(f"--vis {spec!r}: empty entry in the comma list")
-    return sorted({_positive(p, spec) for p in parts})
+    levels = sorted({_positive(p, spec) for p in parts})
+    if len(levels) > MAX_LEVELS:
+        raise VisSelectionError(f"--vis {spec!r}: {len(levels)} levels; at most {MAX_LEVELS}")
+    clash = level_name_clash(levels)
+    if clash:
+        raise VisSelectionError(f"--vis {spec!r}: {clash}")
+    return levels

@@ -20,3 +20,11 @@ class DatasetLockedError(BatchRefusedError):
 
 class ConfigChangedError(BatchRefusedError):
     """The folder holds a dataset made with another configuration (and ``force`` is off)."""
+
+
+class ForeignFolderError(BatchRefusedError):
+    """The output folder is not seahaze's (a file, another program's files or manifest)."""
+
+
+class DamagedManifestError(BatchRefusedError):
+    """The folder's own ``dataset.json`` is damaged (and ``force`` is off)."""

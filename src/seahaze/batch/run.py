@@ -2,10 +2,17 @@
 
 Safety, in the order :func:`run_batch` does it:
 
+0. a folder seahaze did not make (a file, other files, another program's ``dataset.json``) is
+   refused before anything is written into it, ``force`` or not;
 1. a lock file ``OUT/.seahaze.lock`` (:class:`~seahaze.batch.lock.DatasetLock`) refuses a second
    process on the same folder; a lock left by a killed process is taken over with a message;
 2. temporary files a killed run left (``.<name>.tmp<pid>``) are removed;
-3. the plan is compared with the folder's manifest: another config is refused unless ``force``;
+3. the plan is compared with the folder's manifest: another config is refused unless ``force``
+   (which then deletes only files the old manifest lists); a damaged manifest of seahaze's is
+   refused unless ``force`` (which keeps it as ``dataset.json.damaged`` and renders every
+   scene); images or labels in the level folders that are not the dataset's are refused (the
+   COCO files are built from every one of them); a scene marked done is kept only if each of
+   its files is there and intact (header and end read), else it is rendered again;
 4. ``dataset.json`` lists every planned scene in plan order with its state (``pending``,
    ``done``, ``failed``) and is rewritten atomically after each scene, so a crash, SIGKILL or
    Ctrl-C loses at most the scenes in flight and the same command later renders only what is
@@ -33,17 +40,23 @@ from typing import Any, Literal
 from .. import __version__
 from ..dataset import Layout, data_yaml_text, level_entries, manifest
 from ..fileio import write_json, write_text
+from ..metric.errors import MetricInputError
 from ..metric.ground_truth import write_coco
 from ..vessels import CLASS_NAMES
-from ..visibility import CLEAN_LEVEL, level_name
-from .errors import ConfigChangedError
+from ..visibility import CLEAN_LEVEL, is_level_name, level_name
+from .errors import ConfigChangedError, DamagedManifestError, ForeignFolderError
 from .executors import SceneDone, connect_dask, start_executor
 from .folder import (
+    comparable,
+    damaged_message,
     describe_error,
     differences,
+    inspect_folder,
+    keep_damaged,
     prune,
-    read_manifest,
     remove_temporaries,
+    scene_file_problem,
+    stray_files,
     with_current_defaults,
 )
 from .lock import DatasetLock
@@ -93,6 +106,7 @@ def run_batch(
     options = options or BatchOptions()
     reporter = reporter or Reporter(quiet=True)
     root = Path(root).resolve()
+    inspect_folder(root)  # a folder seahaze did not make is refused before the lock is made
     # Reach the cluster before touching the folder: a refusal leaves everything as it was.
     client = connect_dask(options.scheduler or "") if options.executor == "dask" else None
     try:
@@ -155,9 +169,10 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
     """
     ledger = SceneLedger(plan, Layout(root), {job.name: "pending" for job in plan.jobs})
     planned = ledger.manifest()
-    existing = read_manifest(ledger.layout.manifest, force)
-    if existing is not None:
-        existing = with_current_defaults(existing)
+    state = inspect_folder(root)
+    if state.damaged and not force:
+        raise DamagedManifestError(damaged_message(root, state.damaged))
+    existing = with_current_defaults(state.manifest) if state.manifest is not None else None
     changes = differences(existing, planned) if existing is not None else []
     if changes and not force:
         shown = "\n  ".join(changes[:6])
@@ -168,6 +183,8 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
             "files of scenes and levels no longer configured are deleted), or choose "
             "another --out."
         )
+    # Refusals come before any change to the folder.
+    _refuse_strays_and_blocked(plan, ledger, existing)
     # From here on the folder is ours and its config is the planned one.
     written_by = (existing or {}).get("seahaze_version")
     if written_by and written_by != __version__:
@@ -179,8 +196,15 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
     if removed:
         reporter.note(f"removed {removed} temporary file(s) left by an interrupted run")
     level_names = [entry["name"] for entry in ledger.levels]
+    if state.damaged:
+        kept = keep_damaged(ledger.layout.manifest)
+        reporter.warn(
+            f"--force: {ledger.layout.manifest} was damaged ({state.damaged}); kept as "
+            f"{kept.name}, every scene is rendered again, no file was deleted"
+        )
     if changes:
-        pruned = prune(root, set(ledger.status), {CLEAN_LEVEL, *level_names})
+        assert existing is not None
+        pruned = prune(root, existing, set(ledger.status), {CLEAN_LEVEL, *level_names})
         reporter.warn(
             f"--force: the configuration changed ({len(changes)} difference(s)); deleted "
             f"{pruned} file(s) of scenes or levels no longer configured"
@@ -201,6 +225,57 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
     return ledger
 
 
+def _refuse_strays_and_blocked(
+    plan: BatchPlan, ledger: SceneLedger, existing: dict[str, Any] | None
+) -> None:
+    """Refuse images and labels in level folders that are neither planned nor listed by the
+    folder's manifest (the COCO writer reads every one), and a folder where a planned file
+    goes. Files the old manifest lists are the dataset's: ``--force`` may prune them."""
+    root = ledger.layout.root
+    old = existing or {}
+    scenes = {*ledger.status, *(old.get("scenes") or {})}
+    levels = {
+        CLEAN_LEVEL,
+        *(e["name"] for e in ledger.levels),
+        *(e["name"] for e in old.get("levels", [])),
+    }
+    strays = stray_files(root, scenes, levels)
+    if strays:
+        more = f" and {len(strays) - 1} more" if len(strays) > 1 else ""
+        raise ForeignFolderError(
+            f"{root} holds files that are not this dataset's: {strays[0]}{more}. The COCO "
+            "files are built from every image and label in the level folders: move them out "
+            "of the folder (or delete them) and rerun"
+        )
+    # The COCO writer takes every level-named folder under images/ as a level.
+    planned = {CLEAN_LEVEL, *(e["name"] for e in ledger.levels)}
+    listed = {e["name"] for e in old.get("levels", [])}
+    images = root / "images"
+    for folder in sorted(images.iterdir()) if images.is_dir() else ():
+        if folder.name in planned or not is_level_name(folder.name) or not folder.is_dir():
+            continue
+        kept = [
+            p
+            for p in sorted(folder.iterdir())
+            if not (folder.name in listed and p.suffix == ".png" and p.stem in scenes)
+        ]
+        if kept or folder.name not in listed:
+            what = kept[0].relative_to(root) if kept else folder.relative_to(root)
+            raise ForeignFolderError(
+                f"{root} holds {what}, in a level folder that is not this dataset's level "
+                f"and that seahaze did not write; the COCO files are built from every level "
+                "folder in images/: move it out of the folder and rerun"
+            )
+    for job in plan.jobs:
+        levels_of_job = [level_name(v) for v in job.spec.haze.levels]
+        for path in ledger.layout.scene_files(job.name, levels_of_job, job.spec.render.write_exr):
+            if path.exists() and not path.is_file():
+                raise ForeignFolderError(
+                    f"{path} is not a file, but seahaze writes one there: move it out of the "
+                    "folder and rerun"
+                )
+
+
 def _mark_done_scenes(
     ledger: SceneLedger,
     old_scenes: dict[str, Any],
@@ -210,16 +285,16 @@ def _mark_done_scenes(
     """Mark ``done`` the scenes the folder holds, finished, with the planned config."""
     for job in ledger.plan.jobs:
         old = old_scenes.get(job.name) or {}
-        entry = planned_scenes[job.name]
-        same = all(old.get(k) == v for k, v in entry.items() if k != "status")
+        same = comparable(old) == comparable(planned_scenes[job.name])
         if not (same and old.get("status") == "done"):
             continue
         levels = [level_name(v) for v in job.spec.haze.levels]
-        files = ledger.layout.scene_files(job.name, levels, job.spec.render.write_exr)
-        if all(path.exists() for path in files):
+        exr, size = job.spec.render.write_exr, job.spec.camera.resolution
+        problem = scene_file_problem(ledger.layout, job.name, levels, exr, size)
+        if problem is None:
             ledger.status[job.name] = "done"
         else:
-            reporter.warn(f"scene {job.name} is marked done but files are missing: re-render")
+            reporter.warn(f"scene {job.name} is marked done but {problem}: rendering it again")
     ledger.done_before = ledger.done()
 
 
@@ -298,6 +373,7 @@ def finish(
     ledger: SceneLedger, stop: Stop | None, seconds: float, reporter: Reporter
 ) -> BatchReport:
     """Write the last manifest (and the COCO files when every scene is done); the report."""
+    coco_error = None
     try:
         ledger.write_manifest()
         if all(s == "done" for s in ledger.status.values()):
@@ -305,6 +381,8 @@ def finish(
     except OSError as err:
         if stop is None or stop[0] != "write_error":
             stop = ("write_error", f"cannot write the manifest or COCO files: {err}")
+    except MetricInputError as err:  # a file appeared in a level folder during the run
+        coco_error = str(err)
     jobs, total = ledger.jobs, len(ledger.status)
     report = BatchReport(
         "complete",
@@ -327,6 +405,12 @@ def finish(
         report.message = (
             f"interrupted with {report.done} of {total} scenes done; rerun the same command "
             f"to render the other {total - report.done}"
+        )
+    elif coco_error:
+        report.outcome = "failed"
+        report.message = (
+            f"every scene is done but the COCO files cannot be written: {coco_error}; move "
+            "the files seahaze did not write out of the folder and rerun the same command"
         )
     elif ledger.errors:
         report.outcome = "failed"

@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from ..spec import RENDER_MODES
+from . import limits
 from .common import DEFAULT_SCENE, UsageError, load_scenes, parse_res, parse_vis
 
 DEFAULT_OUT = Path("out/dataset")
@@ -32,10 +34,25 @@ def _scene_paths(items: list[str]) -> list[str]:
 
 def _check_batch_args(args: argparse.Namespace) -> None:
     """Reject batch flags that do not fit together, before any scene file is read."""
-    if args.count is not None and args.count < 1:
-        raise UsageError(f"--scenes {args.count}: must be >= 1")
-    if args.workers is not None and args.workers < 1:
-        raise UsageError(f"--workers {args.workers}: must be >= 1")
+    from ..render.variant import SUPPORTED_VARIANTS
+
+    if args.count is not None and not 1 <= args.count <= limits.MAX_SCENES:
+        raise UsageError(
+            f"--scenes {args.count}: must be within 1..{limits.MAX_SCENES:,} (a batch folder "
+            "holds at most that many scenes; split larger datasets over several --out folders)"
+        )
+    most = limits.max_workers()
+    if args.workers is not None and not 1 <= args.workers <= most:
+        raise UsageError(
+            f"--workers {args.workers}: must be within 1..{most} (this machine has "
+            f"{limits.cores()} core(s); each worker renders with cores/workers threads)"
+        )
+    if args.variant is not None and args.variant not in ("auto", *SUPPORTED_VARIANTS):
+        raise UsageError(
+            f"--variant {args.variant!r}: choose one of auto, {', '.join(SUPPORTED_VARIANTS)} "
+            "(seahaze traces images as vectorised JIT arrays in RGB: scalar_*, *_mono and "
+            "*_spectral* variants cannot render it)"
+        )
     if args.executor == "dask":
         if not args.scheduler:
             raise UsageError(
@@ -48,6 +65,94 @@ def _check_batch_args(args: argparse.Namespace) -> None:
             )
     elif args.scheduler:
         raise UsageError("--scheduler needs --executor dask")
+
+
+def _check_out(out: Path) -> Any:
+    """The --out folder's state; a file, or a folder seahaze did not make, is bad input."""
+    from ..batch.errors import BatchRefusedError
+    from ..batch.folder import inspect_folder
+
+    try:
+        return inspect_folder(out.resolve())
+    except BatchRefusedError as err:
+        raise UsageError(str(err)) from None
+    except OSError as err:
+        raise UsageError(f"--out {out}: cannot read it ({err.strerror or err})") from None
+
+
+def _check_layouts(plan: Any) -> None:
+    """Every scene's vessel layout can be built (its own seed and variation): a vessel over the
+    camera or an impossible ``vessels.sample`` is bad input, not a failed scene hours later."""
+    from ..sceneio import layout_problems
+
+    problems = []
+    for job in plan.jobs:
+        problems += [
+            f"scene {job.name}: {'.'.join(str(p) for p in loc)}: {message}"
+            for loc, message in layout_problems(job.spec)[:1]
+        ]
+        if len(problems) == 5:
+            problems.append("… (more scenes not checked)")
+            break
+    if len(problems) == 1:
+        raise UsageError(problems[0])
+    if problems:
+        raise UsageError("\n".join(f"seahaze: error: {line}" for line in problems))
+
+
+def _warn_below_validated_range(plan: Any) -> None:
+    """A warning for levels thinner than the mode's validated range (docs/physics.md)."""
+    for mode in sorted({job.spec.render.mode for job in plan.jobs}):
+        floor = limits.VALIDATED_FROM_M.get(mode)
+        below = sorted(v for v in plan.levels if floor is not None and v < floor)
+        if below:
+            print(
+                f"seahaze: warning: the {mode} mode is validated (within 3 % of converged "
+                f"references) down to V = {floor:g} m; {', '.join(f'{v:g}' for v in below)} m "
+                "lie below it (docs/physics.md); --mode reference is unbiased there but slow",
+                file=sys.stderr,
+            )
+
+
+def _confirm(
+    scenes: list[tuple[Any, str]], args: argparse.Namespace, folder: Any, make_plan: Any
+) -> Any:
+    """Print the estimate of a long job; refuse one of an hour or more without --yes.
+
+    The estimate of all ``--scenes`` of every template comes first (variation does not change
+    a scene's cost), so a huge job is refused before it is planned; only a resumed folder's
+    job is planned to leave out the scenes already done. Returns the plan when made."""
+    plan, count = None, args.count or 1
+    job = limits.estimate([(spec, count) for spec, _ in scenes])
+    reason = limits.confirmation_needed(job)
+    if reason and not args.yes and (folder.manifest or {}).get("scenes"):
+        plan = make_plan()
+        job = limits.estimate([(spec, 1) for spec in _todo(plan, folder)])
+        reason = limits.confirmation_needed(job)
+    if reason and not args.yes:
+        raise UsageError(
+            f"{reason}: {job.describe()}. Pass --yes to start it, or lower --res, --spp, "
+            "--scenes or the levels"
+        )
+    if job.scenes and (reason or job.seconds >= limits.ANNOUNCE_SECONDS) and not args.quiet:
+        print(f"seahaze: estimated {job.describe()}", file=sys.stderr)
+    return plan
+
+
+def _todo(plan: Any, folder: Any) -> list[Any]:
+    """The specs of the planned scenes the folder does not hold done with the same config."""
+    from ..batch.folder import comparable
+
+    old = (folder.manifest or {}).get("scenes") or {}
+    return [
+        job.spec
+        for job in plan.jobs
+        if not (
+            isinstance(old.get(job.name), dict)
+            and old[job.name].get("status") == "done"
+            and comparable(old[job.name]) == comparable(job.entry("done"))
+        )
+    ]
 
 
 def cmd_render(args: argparse.Namespace) -> int:
@@ -64,9 +169,11 @@ def cmd_render(args: argparse.Namespace) -> int:
     from ..spec import OverrideError, with_overrides
 
     _check_batch_args(args)
+    out = Path(args.out)
+    folder = _check_out(out)
     paths = _scene_paths(args.scenes or [str(DEFAULT_SCENE)])
     levels = parse_vis(args.vis)
-    resolution = parse_res(args.res) if args.res else None
+    resolution = parse_res(args.res) if args.res is not None else None
     if args.spp is not None and args.spp < 1:
         raise UsageError(f"--spp {args.spp}: must be >= 1")
     scenes = []
@@ -84,10 +191,21 @@ def cmd_render(args: argparse.Namespace) -> int:
         except OverrideError as err:
             raise UsageError(f"{name}: {err}") from None
         scenes.append((spec, name))
+    total = (args.count or 1) * len(scenes)
     try:
-        plan = plan_scenes(scenes, args.count)
-    except DatasetError as err:
+        limits.check_hard_limits([(name, spec) for spec, name in scenes], total, args.workers)
+    except limits.LimitError as err:
         raise UsageError(str(err)) from None
+
+    def make_plan() -> Any:
+        try:
+            return plan_scenes(scenes, args.count)
+        except DatasetError as err:
+            raise UsageError(str(err)) from None
+
+    plan = _confirm(scenes, args, folder, make_plan) or make_plan()
+    _check_layouts(plan)
+    _warn_below_validated_range(plan)
     if args.executor == "local":
         # A variant that cannot run here is bad input, not a failure of every scene. (Dask
         # workers choose theirs: the coordinator may be a login node without Mitsuba's LLVM.)
@@ -96,7 +214,6 @@ def cmd_render(args: argparse.Namespace) -> int:
                 select_variant(variant)
         except VariantError as err:
             raise UsageError(str(err)) from None
-    out = Path(args.out)
     try:
         reporter = Reporter(quiet=args.quiet, log=Path(args.log) if args.log else None)
     except OSError as err:
@@ -185,7 +302,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--variant",
         metavar="NAME",
-        help="Mitsuba variant: auto, llvm_ad_rgb, cuda_ad_rgb, scalar_rgb, ...",
+        help="Mitsuba variant: auto (cuda_ad_rgb where a GPU works, else llvm_ad_rgb), "
+        "cuda_ad_rgb or llvm_ad_rgb",
     )
     parser.add_argument(
         "--scenes",
@@ -230,5 +348,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--quiet",
         action="store_true",
         help="no progress bar or messages, only warnings and the final summary",
+    )
+    parser.add_argument(
+        "--yes",
+        action="store_true",
+        help="start a job estimated at an hour or more (or close to the machine's memory); "
+        "without it such a job stops with its estimate (docs/limits.md)",
     )
     parser.set_defaults(func=cmd_render)

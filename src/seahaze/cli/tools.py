@@ -52,8 +52,8 @@ def cmd_preview(args: argparse.Namespace) -> int:
 
     root = Path(args.dataset)
     levels = [lv.strip() for lv in args.levels.split(",")] if args.levels else None
-    if args.columns < 1 or args.tile_width < 32:
-        raise UsageError("--columns must be >= 1 and --tile-width >= 32")
+    if not (1 <= args.columns <= 64 and 32 <= args.tile_width <= 4096):
+        raise UsageError("--columns must be within 1..64 and --tile-width within 32..4096")
     try:
         sheet = contact_sheet(
             root, args.scene, levels, args.columns, args.tile_width, not args.no_boxes
@@ -61,8 +61,11 @@ def cmd_preview(args: argparse.Namespace) -> int:
     except PreviewError as err:
         raise UsageError(str(err)) from None
     out = Path(args.out) if args.out else root / "preview.png"
-    out.parent.mkdir(parents=True, exist_ok=True)
-    sheet.save(out)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        sheet.save(out)
+    except (OSError, ValueError) as err:  # ValueError: an unknown image suffix
+        raise UsageError(f"--out {out}: cannot write the contact sheet ({err})") from None
     print(f"wrote {out}")
     return 0
 

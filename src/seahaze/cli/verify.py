@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..spec import RENDER_MODES
 from .common import DEFAULT_SCENE, UsageError, load_scenes, parse_res, parse_vis
+from .limits import MAX_SAMPLES_PER_IMAGE
 
 DEFAULT_VERIFY_OUT = Path("out/verify")
 
@@ -21,8 +22,20 @@ def cmd_verify(args: argparse.Namespace) -> int:
     from ..render.variant import VariantError
     from ..spec import SceneSpec
 
+    out = Path(args.out)
+    blocking = next((p for p in (out, *out.parents) if p.exists()), None)
+    if blocking is not None and not blocking.is_dir():
+        raise UsageError(f"--out {out}: {blocking} is a file, not a folder")
     levels = parse_vis(args.vis) or [verify.DEFAULT_VISIBILITY_M]
-    resolution = parse_res(args.resolution) if args.resolution else verify.DEFAULT_RESOLUTION
+    resolution = verify.DEFAULT_RESOLUTION
+    if args.resolution is not None:
+        resolution = parse_res(args.resolution)
+    per_batch = args.spp // max(args.batches, 1)
+    if resolution[0] * resolution[1] * per_batch > MAX_SAMPLES_PER_IMAGE:
+        raise UsageError(
+            f"--resolution {resolution[0]}x{resolution[1]} at {per_batch} spp per batch is more "
+            "than 2^32 samples per image, Mitsuba's limit: lower --spp or raise --batches"
+        )
     say = (
         (lambda _msg: None)
         if args.quiet
@@ -51,7 +64,12 @@ def cmd_verify(args: argparse.Namespace) -> int:
     except (verify.VerifyInputError, VariantError, ValueError) as err:
         raise UsageError(str(err)) from None
     print(verify.format_report(report))
-    for path in verify.write_outputs(report, Path(args.out), measurements):
+    try:
+        written = verify.write_outputs(report, out, measurements)
+    except OSError as err:
+        print(f"seahaze: error: cannot write to {out}: {err}", file=sys.stderr)
+        return 3
+    for path in written:
         print(f"wrote {path}")
     return 0 if report.passed else 1
 
@@ -139,7 +157,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--variant",
         metavar="NAME",
-        help="Mitsuba variant: auto, llvm_ad_rgb, cuda_ad_rgb, scalar_rgb, ...",
+        help="Mitsuba variant: auto (cuda_ad_rgb where a GPU works, else llvm_ad_rgb), "
+        "cuda_ad_rgb or llvm_ad_rgb",
     )
     parser.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
     parser.set_defaults(func=cmd_verify)

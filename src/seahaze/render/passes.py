@@ -125,13 +125,21 @@ def render_geometry(loaded: LoadedScene) -> GeometryPass:
 
 
 def render_radiance(
-    loaded: LoadedScene, spp: int, seed: int, sensor_index: int = 0, integrator: Any = None
+    loaded: LoadedScene,
+    spp: int,
+    seed: int,
+    sensor_index: int = 0,
+    integrator: Any = None,
+    *,
+    clean: bool = False,
 ) -> np.ndarray:
     """Render linear RGB radiance (H, W, 3) float32 with the scene's current medium, by the
-    scene's integrator or ``integrator`` (the physical mode's)."""
+    scene's integrator or ``integrator`` (the physical mode's); ``clean`` renders the scene
+    without the haze box (:attr:`LoadedScene.clean_scene`)."""
     import mitsuba as mi
 
-    image = mi.render(loaded.scene, sensor=sensor_index, spp=spp, seed=seed, integrator=integrator)
+    scene = loaded.clean_scene if clean and loaded.clean_scene is not None else loaded.scene
+    image = mi.render(scene, sensor=sensor_index, spp=spp, seed=seed, integrator=integrator)
     # Mitsuba 3.9's sunsky gives the sun a negative blue radiance below about 3 deg elevation
     # (RGB -58 for +3819 red: its reddened colour lies outside the sRGB gamut), so the sun, its
     # glint and sunlit pixels can come out negative in blue. Clipping at zero is the gamut clip
@@ -140,9 +148,11 @@ def render_radiance(
 
 
 def render_clean(loaded: LoadedScene, spp: int, seed: int, albedo: float, g: float) -> np.ndarray:
-    """Haze-free radiance: the same scene with the medium's extinction set to zero."""
+    """Haze-free radiance: the scene's surfaces, sun and sky without the haze box, so the clean
+    image is the same in every mode and whatever the haze settings (``albedo`` and ``g`` are
+    kept for callers; the medium is emptied too)."""
     loaded.set_haze(0.0, albedo, g)
-    return render_radiance(loaded, spp, render_seed(seed, RenderPass.CLEAN))
+    return render_radiance(loaded, spp, render_seed(seed, RenderPass.CLEAN), clean=True)
 
 
 def render_reference_level(

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from ..haze import Extinction, extinction_rgb
+from ..ocean.whitecaps import FOAM_REFLECTANCE
 from ..spec import SceneSpec
 from .diffuse_table import DEFAULT_GRID, TableGrid, build_tables
 from .haze_integrator import DEFAULT_BOUNCES, make_integrator
@@ -60,7 +61,12 @@ def emitter_photons(
 
 
 def sample_sea_reflectance(
-    bsdf: Any, n_mu: int = 64, per_bin: int = 4096, seed: int = 0
+    bsdf: Any,
+    n_mu: int = 64,
+    per_bin: int = 4096,
+    seed: int = 0,
+    foam_coverage: float = 0.0,
+    foam_reflectance: float = FOAM_REFLECTANCE,
 ) -> SeaReflectance:
     """The sea's Mitsuba BSDF sampled once for photons (importance transport, as photons travel
     from the light): ``n_mu`` incidence angles × ``per_bin`` samples in the plane of incidence.
@@ -71,6 +77,11 @@ def sample_sea_reflectance(
     sun arrives in one bin, so that bin's samples are reused by all of them: ``per_bin`` (4096)
     keeps their sampling error on the sun's reflected light near 1.5 % of the glint's spread
     (1024 left about 3 %).
+
+    Whitecaps: a fraction ``foam_coverage`` (``W``, 0–1) of the samples, drawn at random, are
+    replaced by a Lambertian reflector of albedo ``foam_reflectance`` (cosine-distributed
+    directions, weight = albedo), so a sample's expected weight is
+    ``(1 - W)·water + W·foam`` — the sea as a plane seen from far (docs/ocean.md).
     """
     import drjit as dr
 
@@ -84,7 +95,8 @@ def sample_sea_reflectance(
     si.sh_frame = mi.Frame3f(mi.Vector3f(1, 0, 0), mi.Vector3f(0, 1, 0), mi.Vector3f(0, 0, 1))
     si.t = 0.0
     si.wi = mi.Vector3f(-sin_in, 0.0, cos_in)
-    u = np.random.default_rng(seed).random((n, 3))
+    rng = np.random.default_rng(seed)
+    u = rng.random((n, 3))
     ctx = mi.BSDFContext(mi.TransportMode.Importance)
     bs, weight = bsdf.sample(ctx, si, mi.Float(u[:, 0]), mi.Point2f(u[:, 1], u[:, 2]))
     wo = np.stack([np.array(bs.wo.x), np.array(bs.wo.y), np.array(bs.wo.z)], axis=1)
@@ -92,7 +104,22 @@ def sample_sea_reflectance(
     w[~np.isfinite(w) | (wo[:, 2] <= 0.0)[:, None].repeat(3, axis=1)] = 0.0
     wo[:, 2] = np.maximum(wo[:, 2], 1e-6)
     wo = wo / np.linalg.norm(wo, axis=1, keepdims=True)
+    if foam_coverage > 0.0:
+        _mix_in_foam(wo, w, rng, foam_coverage, foam_reflectance)
     return SeaReflectance(wo.reshape(n_mu, per_bin, 3), w.reshape(n_mu, per_bin, 3))
+
+
+def _mix_in_foam(
+    wo: np.ndarray, w: np.ndarray, rng: np.random.Generator, coverage: float, albedo: float
+) -> None:
+    """Replace a random fraction ``coverage`` of the samples (in place) by cosine-distributed
+    Lambertian ones of weight ``albedo`` (importance sampling makes cos/pdf = 1)."""
+    foam = rng.random(len(wo)) < coverage
+    r, phi = np.sqrt(rng.random(foam.sum())), 2.0 * np.pi * rng.random(foam.sum())
+    wo[foam] = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1.0 - r**2)], axis=1)
+    wo[foam, 2] = np.maximum(wo[foam, 2], 1e-6)
+    wo[foam] /= np.linalg.norm(wo[foam], axis=1, keepdims=True)
+    w[foam] = albedo
 
 
 def _sea_bsdf(scene: Any) -> Any:
@@ -132,7 +159,11 @@ class PhysicalRenderer:
         self.sky = mi.load_dict(sunsky_dict(spec, sun=False))
         self.sun_azimuth_rad = math.radians(spec.sun.azimuth_deg)
         self.bounces, self.photons = bounces, photons
-        self._sea = sample_sea_reflectance(_sea_bsdf(loaded.scene))
+        self._sea = sample_sea_reflectance(
+            _sea_bsdf(loaded.scene),
+            foam_coverage=loaded.sea_foam_coverage,
+            foam_reflectance=loaded.sea_foam_reflectance,
+        )
         self._integrators: dict[tuple[int, bool], Any] = {}
 
     def tables(

@@ -4,9 +4,13 @@ The scene holds: a perspective camera near the origin, a tiny horizon camera for
 airlight, the ``sunsky`` emitter, the sea and vessel meshes, and a box with a null BSDF whose
 interior is the haze medium (a fog attached only to the sensor is unbounded and receives no
 light). The box is sized by :func:`seahaze.haze.haze_box_half_width` for the thinnest haze of the
-run; vertically it runs from below the sea surface to the haze top. The medium is changed per
-level through ``mi.traverse`` (no reload, no recompilation); the clean pass sets its extinction
-to zero. The ``physical`` mode computes the haze itself and loads the scene without the box.
+run and at least :data:`BOX_LAYER_WIDTHS` layer thicknesses; vertically it runs from below the
+sea surface to the haze top. The medium is changed per level through ``mi.traverse`` (no reload,
+no recompilation). The clean pass renders a second Mitsuba scene holding the same surfaces, sun
+and sky without the box (``LoadedScene.clean_scene``): rays crossing the box's null surfaces draw
+extra random numbers, so a clean pass through an empty box would change its noise with
+``haze.top_m``, the levels (the box width) and whether the camera is inside the layer. The
+``physical`` mode computes the haze itself and loads the scene without the box.
 
 The sea's BSDF (:func:`sea_surface_bsdf`) blends, by the sea mesh's per-vertex attributes,
 a far and a near water lobe (``blendbsdf`` weighted by ``vertex_near_roughness``: each vertex's
@@ -44,6 +48,12 @@ FAR_CLIP_M = 1.0e7
 """The perspective sensor's far clip (Mitsuba's default of 10 km would cut the far sea)."""
 AIRLIGHT_FOV_DEG = 0.5
 AIRLIGHT_RES = 8
+BOX_LAYER_WIDTHS = 3.0
+"""Least half-width of the haze box in thicknesses ``H`` of the layer (``haze.top_m`` minus its
+bottom). In dense haze the light reaches the camera by diffusing down through the layer, and
+light let in through the box's sides changes that field near the camera by about
+``exp(−π W / H)`` (the slowest diffusion mode of a slab), not by ``exp(−σ W)``: with only
+``σ W = 8`` a `reference` render at V = 50 m was 3-7x too bright. ``3 H`` keeps it below 1e-4."""
 
 
 def _mi():
@@ -193,6 +203,9 @@ class LoadedScene:
     sea_foam_reflectance: float = FOAM_REFLECTANCE
     """Mean (effective) visible reflectance of that foam, a Lambertian albedo (0.22, Koepke
     1984): the foam-weighted mean of the per-vertex foam reflectance."""
+    clean_scene: Any = None
+    """The same surfaces, sun and sky without the haze box, for the clean pass (None: ``scene``
+    has no box and serves)."""
 
     @property
     def has_haze_box(self) -> bool:
@@ -247,11 +260,14 @@ def build_scene(
         channel_extinction(v, haze.threshold, haze.extinction_spectrum).min()
         for v in visibilities_m or [1.0e4]
     )
-    half_width = haze_box_half_width(sigma_min, reach_m)
+    half_width = max(
+        haze_box_half_width(sigma_min, reach_m), BOX_LAYER_WIDTHS * (top - HAZE_BOTTOM_M)
+    )
     inside = camera.height_m < top and haze_box
+    integrator = {"type": "volpath", "max_depth": spec.render.max_depth, "rr_depth": 8}
     scene: dict[str, Any] = {
         "type": "scene",
-        "integrator": {"type": "volpath", "max_depth": spec.render.max_depth, "rr_depth": 8},
+        "integrator": integrator,
         HAZE_ID: {
             "type": "homogeneous",
             # RGB so that the extinction may differ per channel (haze.extinction_spectrum).
@@ -289,14 +305,23 @@ def build_scene(
             "bsdf": {"type": "null"},
             "interior": {"type": "ref", "id": HAZE_ID},
         },
-        "sea": _mesh(geometry.sea, sea_surface_bsdf(spec, geometry)),
     }
     if not haze_box:
         del scene[HAZE_BOX_ID], scene[HAZE_ID]
+    surfaces = {"sea": _mesh(geometry.sea, sea_surface_bsdf(spec, geometry))}
     for vessel in geometry.vessels:
         for part in vessel.parts:
             bsdf = BLACK_BSDF if black_vessels else _vessel_bsdf(part.rgb, part.roughness)
-            scene[part.name] = _mesh(part, bsdf)
+            surfaces[part.name] = _mesh(part, bsdf)
+    scene.update(surfaces)
+    clean_scene = None
+    if haze_box:
+        # The clean pass's scene: the same mesh objects (shared, not copied), no box, no medium.
+        sensor = _sensor_dict(
+            camera, camera.width, camera.height, camera.fov_deg, camera.pitch_deg, False
+        )
+        clean = {"type": "scene", "integrator": integrator, "sensor": sensor}
+        clean_scene = mi.load_dict({**clean, "sky": sunsky_dict(spec), **surfaces})
     loaded = mi.load_dict(scene)
     params = mi.traverse(loaded)
     shape_ids: dict[int, int] = {}
@@ -315,4 +340,5 @@ def build_scene(
         spec,
         sea_roughness=geometry.sea_roughness,
         sea_foam_coverage=geometry.sea_foam_coverage,
+        clean_scene=clean_scene,
     )

@@ -3,8 +3,13 @@
 Mitsuba's ``llvm_*`` variants JIT-compile kernels with libLLVM. Debian 12's default LLVM 15 makes
 drjit abort ("Cannot select ... fminimum"); LLVM 19 (``apt-get install libllvm19``) works. drjit
 reads ``DRJIT_LIBLLVM_PATH`` when its LLVM backend starts, so the path is set before Mitsuba is
-imported. ``auto`` tries ``cuda_ad_rgb`` (where a GPU works), then ``llvm_ad_rgb``, then
-``scalar_rgb`` with a warning (about 2x slower per sample and single-threaded per ray here).
+imported. ``auto`` tries ``cuda_ad_rgb`` (where a GPU works), then ``llvm_ad_rgb``.
+
+Only these two variants are offered (:data:`SUPPORTED_VARIANTS`): seahaze's passes trace whole
+images as vectorised JIT arrays (the geometry pass, the ``physical`` integrator) and read RGB
+radiance, so the ``scalar_*`` variants (no vectorised shape pointers: ``mi.ShapePtr`` does not
+exist there) and the ``*_mono`` and ``*_spectral*`` variants fail every scene. Without a GPU and
+without libLLVM there is no fallback: the error says how to install libLLVM.
 """
 
 from __future__ import annotations
@@ -12,8 +17,9 @@ from __future__ import annotations
 import glob
 import os
 import re
-import warnings
 from pathlib import Path
+
+from ..spec import MITSUBA_VARIANTS
 
 MIN_LLVM_MAJOR = 16
 """Oldest libLLVM accepted; 15 aborts inside drjit, 19 is the version tested here."""
@@ -25,7 +31,9 @@ _LLVM_DIRS = (
     "/usr/lib",
     "/usr/local/lib",
 )
-_AUTO_ORDER = ("cuda_ad_rgb", "llvm_ad_rgb", "scalar_rgb")
+SUPPORTED_VARIANTS = MITSUBA_VARIANTS
+"""The Mitsuba variants seahaze renders with, in the order ``auto`` tries them."""
+_INSTALL_LLVM = "install libLLVM >= 16 with 'apt-get install libllvm19' (scripts/bootstrap.sh)"
 _selected: str | None = None
 
 
@@ -85,11 +93,14 @@ def select_variant(requested: str = "auto") -> str:
     import mitsuba as mi
 
     if requested != "auto":
-        if requested.startswith("llvm") and not llvm:
+        if requested not in SUPPORTED_VARIANTS:
             raise VariantError(
-                f"variant {requested!r} needs libLLVM >= {MIN_LLVM_MAJOR}; install it with "
-                "'apt-get install libllvm19'"
+                f"variant {requested!r} is not supported; choose one of: auto, "
+                f"{', '.join(SUPPORTED_VARIANTS)} (seahaze traces images as vectorised JIT "
+                "arrays in RGB: scalar_*, *_mono and *_spectral* variants cannot render it)"
             )
+        if requested.startswith("llvm") and not llvm:
+            raise VariantError(f"variant {requested!r} needs libLLVM: {_INSTALL_LLVM}")
         if requested.startswith("cuda") and not _cuda_usable():
             raise VariantError(f"variant {requested!r} needs an NVIDIA GPU and driver; none found")
         if not _try_set(requested):
@@ -99,20 +110,15 @@ def select_variant(requested: str = "auto") -> str:
             )
         _selected = requested
         return requested
-    for name in _AUTO_ORDER:
+    for name in SUPPORTED_VARIANTS:
         if name.startswith("cuda") and not _cuda_usable():
             continue
         if name.startswith("llvm") and not llvm:
             continue
         if _try_set(name):
-            if name.startswith("scalar"):
-                warnings.warn(
-                    "seahaze: no GPU and no libLLVM >= 16 found; rendering with the slow "
-                    "scalar_rgb variant "
-                    "(install libllvm19 for the fast llvm_ad_rgb variant)",
-                    RuntimeWarning,
-                    stacklevel=2,
-                )
             _selected = name
             return name
-    raise VariantError("no Mitsuba variant could be activated")
+    raise VariantError(
+        f"no usable Mitsuba variant: seahaze needs an NVIDIA GPU (cuda_ad_rgb) or libLLVM "
+        f"(llvm_ad_rgb); {_INSTALL_LLVM}"
+    )
