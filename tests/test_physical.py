@@ -174,3 +174,22 @@ def test_physical_is_deterministic_and_reuses_its_kernel(scenes: _Scenes) -> Non
     assert launched and all(k.get("cache_hit") for k in launched), [
         (k.get("cache_hit"), k.get("operation_count")) for k in launched
     ]
+
+
+def test_table_sea_mixes_in_foam_by_its_coverage() -> None:
+    """The photon table's sea is ``(1 - W)·water + W·Lambertian(ρ)``: all foam gives weight ρ
+    and a cosine law (mean cos θ = 2/3); a partial cover adds its share to the water's mean
+    reflectance (independently: the water-only sampling of the same BSDF)."""
+    import mitsuba as mi
+
+    from seahaze.render.physical import sample_sea_reflectance
+
+    water = mi.load_dict({"type": "roughdielectric", "alpha": 0.1, "int_ior": 1.333})
+    rho = 0.22
+    foam = sample_sea_reflectance(water, n_mu=4, per_bin=20000, foam_coverage=1.0)
+    assert np.allclose(foam.weight, rho)
+    assert foam.wo[..., 2].mean() == pytest.approx(2.0 / 3.0, abs=0.005)
+    bare = sample_sea_reflectance(water, n_mu=4, per_bin=20000).weight[..., 1].mean(axis=1)
+    mixed = sample_sea_reflectance(water, n_mu=4, per_bin=20000, seed=1, foam_coverage=0.3)
+    expected = 0.7 * bare + 0.3 * rho
+    assert np.allclose(mixed.weight[..., 1].mean(axis=1), expected, rtol=0.05, atol=0.004)
