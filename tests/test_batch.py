@@ -270,7 +270,7 @@ def test_reference_batch_is_complete_and_logged(reference):
     events = [json.loads(line) for line in (reference.parent / "reference.jsonl").open()]
     assert [e["event"] for e in events] == ["start"] + ["scene_done"] * COUNT + ["end"]
     done = [e for e in events if e["event"] == "scene_done"]
-    assert all(e["images"] == 2 and e["seconds"] > 0 and "clean" in e["timings"] for e in done)
+    assert all(e["images"] == 2 and e["seconds"] > 0 and "pass" in e["timings"] for e in done)
     assert events[-1]["outcome"] == "complete" and events[-1]["images"] == 2 * COUNT
 
 
