@@ -237,13 +237,14 @@ class ShipWaves:
         # continuous transform into grid values.
         phase = np.exp(1j * (kx[None, :] * self.origin[0] + ky[:, None] * self.origin[1]))
         spectrum = zeta_hat * phase / (h * h)
-        height = np.fft.ifft2(spectrum).real
-        sx = np.fft.ifft2(1j * kx[None, :] * spectrum).real
-        sy = np.fft.ifft2(1j * ky[:, None] * spectrum).real
+        # Height and both slopes in one single-precision transform of the three spectra: the
+        # field's own accuracy (linear theory, grid interpolation) is far coarser than float32,
+        # and at 2048² this is 6x faster than three double-precision transforms (a scene with
+        # three moving vessels spent 5.7 s here).
+        stacked = np.stack([spectrum, 1j * kx[None, :] * spectrum, 1j * ky[:, None] * spectrum])
+        height, sx, sy = sfft.ifft2(stacked.astype(np.complex64), workers=-1).real
         window = self._window(nx, ny, h)
         slope = np.hypot(sx, sy) * window
-        # float32 halves the memory of a large grid (2048² → 16 MB per field); the field's own
-        # accuracy (linear theory, grid interpolation) is far coarser than float32.
         return (height * window).astype(np.float32), slope.astype(np.float32)
 
     def _window(self, nx: int, ny: int, h: float) -> np.ndarray:
