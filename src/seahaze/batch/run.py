@@ -31,7 +31,8 @@ from pathlib import Path
 from typing import Any, Literal
 
 from .. import __version__
-from ..dataset import Layout, data_yaml_text, level_entries, manifest
+from ..dataset import Layout, data_yaml_text, level_entries, manifest, split_list_text
+from ..dataset.splits import SPLIT_NAMES
 from ..fileio import write_json, write_text
 from ..metric.ground_truth import write_coco
 from ..vessels import CLASS_NAMES
@@ -192,13 +193,43 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
             f"resuming: {ledger.done_before} of {len(plan.jobs)} scenes already done, "
             f"{pending} to render"
         )
-    write_text(ledger.layout.data_yaml, data_yaml_text(root, level_names, CLASS_NAMES))
+    write_split_files(ledger, existing, level_names, reporter)
     ledger.write_manifest()
     if pending:
         # COCO files describe every scene of a level: stale until the last scene is done.
         for level in [CLEAN_LEVEL, *level_names]:
             ledger.layout.coco(level).unlink(missing_ok=True)
     return ledger
+
+
+def write_split_files(
+    ledger: SceneLedger,
+    existing: dict[str, Any] | None,
+    level_names: list[str],
+    reporter: Reporter,
+) -> None:
+    """Write ``data.yaml`` and, with a split, each split's image list; delete the lists of
+    splits the folder's previous config had and this one has not."""
+    layout, split = ledger.layout, ledger.plan.split
+    fractions = split.as_dict() if split else {}
+    names = [name for name in SPLIT_NAMES if fractions.get(name, 0) > 0]
+    write_text(layout.data_yaml, data_yaml_text(layout.root, level_names, CLASS_NAMES, names))
+    members: dict[str, list[str]] = {name: [] for name in names}
+    for job in ledger.plan.jobs:
+        if job.split is not None:
+            members[job.split].append(job.name)
+    for name, scenes in members.items():
+        write_text(layout.split_list(name), split_list_text(scenes))
+        if not scenes:
+            reporter.warn(
+                f"split '{name}' ({fractions[name]:g}) has none of the {len(ledger.plan.jobs)} "
+                f"scene(s): {layout.split_list(name).name} is empty; render more scenes or "
+                "change --split"
+            )
+    before = ((existing or {}).get("config") or {}).get("split") or {}
+    for name in SPLIT_NAMES:
+        if before.get(name, 0) > 0 and name not in members:
+            layout.split_list(name).unlink(missing_ok=True)
 
 
 def _mark_done_scenes(
@@ -211,7 +242,8 @@ def _mark_done_scenes(
     for job in ledger.plan.jobs:
         old = old_scenes.get(job.name) or {}
         entry = planned_scenes[job.name]
-        same = all(old.get(k) == v for k, v in entry.items() if k != "status")
+        # A scene's split is bookkeeping, not rendering: a new split keeps its files.
+        same = all(old.get(k) == v for k, v in entry.items() if k not in ("status", "split"))
         if not (same and old.get("status") == "done"):
             continue
         levels = [level_name(v) for v in job.spec.haze.levels]
