@@ -32,6 +32,7 @@ from typing import Any, Literal
 
 from .. import __version__
 from ..dataset import Layout, data_yaml_text, level_entries, manifest, split_list_text
+from ..dataset.card import remove_card, write_card
 from ..dataset.splits import SPLIT_NAMES
 from ..fileio import write_json, write_text
 from ..metric.ground_truth import write_coco
@@ -196,9 +197,10 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
     write_split_files(ledger, existing, level_names, reporter)
     ledger.write_manifest()
     if pending:
-        # COCO files describe every scene of a level: stale until the last scene is done.
+        # COCO files and the card describe every scene: stale until the last scene is done.
         for level in [CLEAN_LEVEL, *level_names]:
             ledger.layout.coco(level).unlink(missing_ok=True)
+        remove_card(root)
     return ledger
 
 
@@ -334,6 +336,10 @@ def finish(
         ledger.write_manifest()
         if all(s == "done" for s in ledger.status.values()):
             write_coco(ledger.layout.root)
+            if not write_card(ledger.layout.root):
+                reporter.warn(
+                    f"{ledger.layout.card} was not written by seahaze: kept, no dataset card"
+                )
     except OSError as err:
         if stop is None or stop[0] != "write_error":
             stop = ("write_error", f"cannot write the manifest or COCO files: {err}")

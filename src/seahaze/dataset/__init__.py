@@ -3,6 +3,7 @@
 * :mod:`~seahaze.dataset.layout` — where every file of a dataset folder lives.
 * :mod:`~seahaze.dataset.manifest` — ``dataset.json``, ``data.yaml`` and the split lists.
 * :mod:`~seahaze.dataset.splits` — scene-disjoint train/val/test splits, stable as a batch grows.
+* :mod:`~seahaze.dataset.card` — the dataset card ``README.md``.
 * :mod:`~seahaze.dataset.writer` — a rendered scene's files (imported on its own: it needs the
   render layer's types).
 
@@ -12,6 +13,7 @@ The layout is a contract users and tools rely on: docs/dataset-format.md.
 from .layout import Layout
 from .manifest import (
     FORMAT_VERSION,
+    config_hash,
     data_yaml_text,
     level_entries,
     manifest,
@@ -24,6 +26,7 @@ __all__ = [
     "Layout",
     "SplitError",
     "SplitFractions",
+    "config_hash",
     "data_yaml_text",
     "level_entries",
     "manifest",

@@ -3,6 +3,8 @@ split lists."""
 
 from __future__ import annotations
 
+import hashlib
+import json
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -78,6 +80,21 @@ def split_list_text(scenes: Sequence[str]) -> str:
     own folder (the convention of its COCO ``train2017.txt``), so the list stays valid when the
     dataset folder moves."""
     return "".join(f"./images/{CLEAN_LEVEL}/{scene}.png\n" for scene in scenes)
+
+
+def config_hash(data: dict[str, Any]) -> str:
+    """A short SHA-256 of what a dataset's content depends on: the manifest's format version,
+    config, levels, classes and every scene's record (without its ``status`` and ``error``).
+
+    Two folders with the same hash were made from the same configuration.
+    """
+    scenes = {
+        name: {k: v for k, v in entry.items() if k not in ("status", "error")}
+        for name, entry in (data.get("scenes") or {}).items()
+    }
+    content = {key: data.get(key) for key in ("format_version", "config", "levels", "classes")}
+    text = json.dumps({**content, "scenes": scenes}, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
 
 def manifest(
