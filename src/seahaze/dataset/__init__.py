@@ -4,6 +4,7 @@
 * :mod:`~seahaze.dataset.manifest` — ``dataset.json``, ``data.yaml`` and the split lists.
 * :mod:`~seahaze.dataset.splits` — scene-disjoint train/val/test splits, stable as a batch grows.
 * :mod:`~seahaze.dataset.card` — the dataset card ``README.md``.
+* :mod:`~seahaze.dataset.owned` — files a seahaze tool created in a folder it shares with others.
 * :mod:`~seahaze.dataset.writer` — a rendered scene's files (imported on its own: it needs the
   render layer's types).
 
