@@ -13,7 +13,7 @@ from pathlib import Path
 from conftest import SPLIT_SCENES
 from seahaze.cli import main
 from seahaze.dataset import config_hash
-from seahaze.dataset.card import CARD_MARKER, write_card
+from seahaze.dataset.card import CARD_MARKER, remove_card, write_card
 from seahaze.vessels import CLASS_NAMES
 
 
@@ -84,6 +84,22 @@ def test_a_readme_seahaze_did_not_write_is_kept(split_template, split_dataset, t
     assert "README.md was not written by seahaze: kept" in capsys.readouterr().err
     assert _card(out) == "# my notes\n"
     assert not write_card(out)
+
+
+def test_a_folder_or_a_broken_link_named_readme_is_left_alone(split_dataset, tmp_path):
+    for kind in ("folder", "link"):
+        out = tmp_path / kind
+        shutil.copytree(split_dataset, out)
+        card = out / "README.md"
+        card.unlink()
+        if kind == "folder":
+            card.mkdir()
+        else:
+            card.symlink_to(tmp_path / "missing.md")
+        assert not write_card(out)  # not a card seahaze wrote: not replaced, no crash
+        remove_card(out)  # nor deleted while scenes are pending
+        assert card.is_dir() if kind == "folder" else card.is_symlink()
+        assert not (tmp_path / "missing.md").exists()
 
 
 def test_a_dataset_without_split_has_a_card_with_one_split(dataset):

@@ -94,8 +94,10 @@ def card_text(data: dict[str, Any], counts: dict[str, SplitCounts]) -> str:
 
 def is_foreign(path: Path) -> bool:
     """Whether ``path`` is a file seahaze did not write as a card (it never touches those)."""
-    if not path.exists():
+    if not (path.exists() or path.is_symlink()):
         return False
+    if not path.is_file():
+        return True  # a folder or a broken link named README.md: not ours either
     with path.open(encoding="utf-8", errors="replace") as fh:
         return fh.readline().rstrip("\n") != CARD_MARKER
 
