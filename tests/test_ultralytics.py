@@ -72,9 +72,9 @@ def env(tmp_path_factory) -> dict[str, str]:
     }
 
 
-def run(env: dict[str, str], cwd: Path, tool: str, *args: str) -> str:
-    """Run ``yolo …`` or ``seahaze …`` guarded; returns stdout + stderr (asserts success and
-    no network attempt)."""
+def run(env: dict[str, str], cwd: Path, tool: str, *args: str, code: int = 0) -> str:
+    """Run ``yolo …`` or ``seahaze …`` guarded; returns stdout + stderr (asserts exit ``code``
+    and no network attempt)."""
     guard = Path(env["YOLO_CONFIG_DIR"]) / "guard.py"
     proc = subprocess.run(
         [sys.executable, str(guard), tool, *args],
@@ -85,9 +85,15 @@ def run(env: dict[str, str], cwd: Path, tool: str, *args: str) -> str:
         timeout=900,
     )
     text = proc.stdout + proc.stderr
-    assert proc.returncode == 0, text[-3000:]
+    assert proc.returncode == code, text[-3000:]
     assert "NETWORK ATTEMPTS: 0 " in text, text[-3000:]
     return text
+
+
+def yolo_val(env: dict[str, str], cwd: Path, weights: Path, data: str, split: str) -> str:
+    """``yolo val`` of ``weights`` on one split of a dataset YAML, without plots, on the CPU."""
+    args = [f"model={weights}", f"data={data}", f"split={split}", f"imgsz={IMGSZ}"]
+    return run(env, cwd, "yolo", "val", *args, "plots=False", "device=cpu")
 
 
 @pytest.fixture(scope="module")
@@ -144,18 +150,7 @@ def test_yolo_val_finds_every_level_and_its_labels_from_any_folder(data, weights
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     for level in LEVELS:
-        text = run(
-            env,
-            elsewhere,
-            "yolo",
-            "val",
-            f"model={weights}",
-            f"data={data / 'data.yaml'}",
-            f"split={level}",
-            f"imgsz={IMGSZ}",
-            "plots=False",
-            "device=cpu",
-        )
+        text = yolo_val(env, elsewhere, weights, str(data / "data.yaml"), level)
         assert "No labels found" not in text
         assert f"Scanning {data / 'labels' / level}" in text
         images, instances, _ = _val_row(text)
@@ -171,18 +166,7 @@ def test_yolo_val_reads_the_split_lists(data, weights, env, tmp_path):
         expected = _instances(data, "clean", scenes)
         if not expected:
             continue  # Ultralytics prints no 'all' row without labels
-        text = run(
-            env,
-            tmp_path,
-            "yolo",
-            "val",
-            f"model={weights}",
-            f"data={data / 'data.yaml'}",
-            f"split={split}",
-            f"imgsz={IMGSZ}",
-            "plots=False",
-            "device=cpu",
-        )
+        text = yolo_val(env, tmp_path, weights, str(data / "data.yaml"), split)
         assert _val_row(text)[:2] == (len(scenes), expected)
         checked += 1
     assert checked >= 2
@@ -195,18 +179,7 @@ def test_the_yolo_export_is_a_movable_standard_dataset(data, weights, env, tmp_p
     shutil.move(view, moved)  # no 'path' in its YAMLs: it still works after a move
     manifest = json.loads((data / "dataset.json").read_text())
     train = [n for n, e in manifest["scenes"].items() if e["split"] == "train"]
-    text = run(
-        env,
-        tmp_path,
-        "yolo",
-        "val",
-        f"model={weights}",
-        "data=moved/v0500/data.yaml",
-        "split=train",
-        f"imgsz={IMGSZ}",
-        "plots=False",
-        "device=cpu",
-    )
+    text = yolo_val(env, tmp_path, weights, "moved/v0500/data.yaml", "train")
     images, instances, _ = _val_row(text)
     assert (images, instances) == (len(train), _instances(data, "v0500", train))
 
@@ -327,3 +300,24 @@ def test_newvis_with_a_model_runs_it_on_restored_images(data, weights, env, tmp_
 def test_data_yaml_levels_are_absolute(data):
     doc = yaml.safe_load((data / "data.yaml").read_text())
     assert all(Path(doc[level]).is_absolute() for level in LEVELS)
+
+
+def test_a_model_with_other_classes_or_a_missing_device_is_one_line_exit_2(
+    data, weights, env, tmp_path
+):
+    args = ["metric", "calibrate", "--dataset", str(data), "--pred", str(tmp_path / "p")]
+    args += ["--out", str(tmp_path / "t"), "--model"]
+    text = run(env, tmp_path, "seahaze", *args, str(weights), "--device", "99", code=2)
+    assert "error: --device 99: Invalid CUDA 'device=99' requested" in text
+    assert "Traceback" not in text
+    # A detector trained on other classes: the data.yaml of a copy with names changed.
+    other = tmp_path / "other"
+    shutil.copytree(data, other)
+    doc = yaml.safe_load((other / "data.yaml").read_text())
+    doc["names"] = {**doc["names"], 0: "cargo"}
+    (other / "data.yaml").write_text(yaml.safe_dump(doc))
+    args[3] = str(other)
+    text = run(env, tmp_path, "seahaze", *args, str(weights), code=2)
+    assert "the model's classes are not the dataset's" in text
+    assert "class 0 is 'container_ship' in the model, 'cargo' in the dataset" in text
+    assert not list((tmp_path / "p").rglob("*.txt"))

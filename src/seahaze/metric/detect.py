@@ -114,7 +114,23 @@ def load_detector(
             f"{_name(names, first)!r} in the model, {_name(class_names, first)!r} in the "
             f"dataset ({len(names)} vs {len(class_names)} classes); train it on this dataset",
         )
-    return Detector(model, weights.resolve(), settings or DetectorSettings())
+    settings = settings or DetectorSettings()
+    _check_device(settings.device)
+    return Detector(model, weights.resolve(), settings)
+
+
+def _check_device(device: str | None) -> None:
+    """Raise :class:`MetricInputError` (one line) for a ``--device`` this machine lacks, before
+    any image is read (Ultralytics' own message spans many lines)."""
+    if device is None:
+        return
+    from ultralytics.utils.torch_utils import select_device
+
+    try:
+        select_device(device, verbose=False)
+    except ValueError as exc:
+        first = next((line for line in str(exc).splitlines() if line.strip()), str(exc))
+        raise MetricInputError(f"--device {device}: {first.strip()}") from None
 
 
 def _name(names: Sequence[str], i: int) -> str | None:
