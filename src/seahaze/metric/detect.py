@@ -1,22 +1,30 @@
 """A detector in the loop: run an Ultralytics model and write the prediction files the metric
 reads (``PRED/<level>/<scene>.txt``, ``class cx cy w h conf`` normalised).
 
-The settings are the metric's, not Ultralytics' ``predict`` defaults: confidence 0.001 (AP
-integrates the whole precision–recall curve; ``predict``'s default 0.25 would cut its tail),
-NMS IoU 0.7 and up to 300 detections per image, as ``yolo val`` uses, and the image size the
-model was trained at unless ``imgsz`` is given. Ultralytics is imported only here, on demand
-(``pip install 'seahaze[detect]'``), and kept offline: ``YOLO_OFFLINE`` is set before its
-import, a weights file must exist locally (nothing is downloaded), and nothing is plotted or
-saved by Ultralytics itself. See docs/detectors.md.
+The boxes are the ones ``yolo val`` scores, not ``yolo predict``'s: each batch of images (sorted
+by aspect ratio) is letterboxed into ``yolo val``'s rectangle (the image's long side at the
+inference size, half a stride of extra padding, grey 114, centred) and NMS keeps a box once per
+class above the threshold (``multi_label``), with ``yolo val``'s settings: confidence 0.001,
+NMS IoU 0.7, up to 300 detections per image, and the image size the model was trained at unless
+``imgsz`` is given. The model runs through Ultralytics' own ``AutoBackend`` (what ``val`` and
+``predict`` use) and its public ``non_max_suppression`` and ``scale_boxes``; no Ultralytics code
+is patched. Ultralytics is imported only here, on demand (``pip install 'seahaze[detect]'``),
+and kept offline: ``YOLO_OFFLINE`` is set before its import, a weights file must exist locally
+(nothing is downloaded), and nothing is plotted or saved by Ultralytics itself. See
+docs/detectors.md.
 """
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from seahaze.dataset.owned import ForeignFileError, OwnedFiles
 from seahaze.fileio import write_text
@@ -26,6 +34,11 @@ INSTALL_HINT = (
     "--model needs Ultralytics: install PyTorch for your machine, then "
     "pip install 'seahaze[detect]' (docs/detectors.md)"
 )
+VAL_PAD = 0.5
+"""Extra padding of ``yolo val``'s rectangles, in strides (``pad`` of ``build_yolo_dataset``
+for every mode but ``train``)."""
+PAD_VALUE = 114
+"""Grey of the letterbox border (Ultralytics' ``LetterBox`` default)."""
 
 
 @dataclass(frozen=True)
@@ -67,14 +80,29 @@ class Detector:
             "ultralytics": ultralytics.__version__,
             **{k: v for k, v in asdict(self.settings).items() if k != "batch"},
             "imgsz_used": self.imgsz,
+            "boxes": "yolo val (rectangular letterbox, pad 0.5; multi-label NMS)",
         }
 
     @property
-    def imgsz(self) -> int | list[int]:
-        """The inference size: the setting, else the model's training size, else 640."""
+    def imgsz(self) -> int:
+        """The inference size: the setting, else the model's training size (its largest side
+        if a list), else 640."""
         if self.settings.imgsz is not None:
             return self.settings.imgsz
-        return self.model.overrides.get("imgsz") or 640
+        size = self.model.overrides.get("imgsz") or 640
+        return int(size if isinstance(size, int) else max(size))
+
+    @cached_property
+    def backend(self) -> Any:
+        """The model on its device, Conv and BatchNorm fused, in eval mode: Ultralytics'
+        ``AutoBackend``, as ``yolo val`` and ``yolo predict`` wrap it."""
+        from ultralytics.nn.autobackend import AutoBackend
+        from ultralytics.utils.torch_utils import select_device
+
+        device = select_device(self.settings.device, verbose=False)
+        backend = AutoBackend(self.model.model, device=device, fuse=True, verbose=False)
+        backend.eval()
+        return backend
 
 
 def load_detector(
@@ -102,6 +130,8 @@ def load_detector(
         raise located(weights, f"cannot load the model ({exc.__class__.__name__}: {exc})") from None
     if model.task != "detect":
         raise located(weights, f"a {model.task!r} model; the metric needs a detection model")
+    if isinstance(model.model, (str, Path)):  # an exported format (ONNX, TensorRT, ...)
+        raise located(weights, "not a PyTorch model; give the trained .pt file")
     names = [str(model.names[i]) for i in sorted(model.names)]
     if names != list(class_names):
         first = next(
@@ -138,29 +168,134 @@ def _name(names: Sequence[str], i: int) -> str | None:
 
 
 def predict(detector: Detector, images: Mapping[str, Path]) -> Iterator[tuple[str, str]]:
-    """``(scene, prediction file text)`` for every image, in batches, in ``images``' order."""
+    """``(scene, prediction file text)`` for every image: the boxes ``yolo val`` makes of them.
+
+    As ``yolo val`` does: the images are sorted by aspect ratio (height / width) and taken
+    ``batch`` at a time; each is resized so that its long side is the inference size; a batch
+    shares one canvas, ``ceil(side · imgsz / stride + 0.5) · stride`` on each side, with
+    ``side`` 1 for the long side and the batch's extreme aspect ratio for the short one; each
+    image is centred on it, grey 114 around it; NMS keeps a box once for every class above the
+    confidence threshold; the boxes are mapped back to the image. The scenes come in that
+    order.
+    """
+    import torch
+
     s = detector.settings
-    items = list(images.items())
-    for start in range(0, len(items), s.batch):
-        chunk = items[start : start + s.batch]
-        results = detector.model.predict(
-            source=[str(path) for _, path in chunk],
-            conf=s.conf,
-            iou=s.iou,
-            max_det=s.max_det,
-            imgsz=detector.imgsz,
-            device=s.device,
-            verbose=False,
-            save=False,
-        )
-        for (scene, _), result in zip(chunk, results, strict=True):
-            yield scene, prediction_text(result)
+    backend = detector.backend
+    stride = int(backend.stride)
+    sizes = {scene: _image_size(path) for scene, path in images.items()}
+    order = sorted(images, key=lambda scene: sizes[scene][0] / sizes[scene][1])
+    for start in range(0, len(order), s.batch):
+        chunk = order[start : start + s.batch]
+        ratios = [sizes[scene][0] / sizes[scene][1] for scene in chunk]
+        canvas = val_canvas(min(ratios), max(ratios), detector.imgsz, stride)
+        placed = [_letterbox(images[scene], detector.imgsz, canvas) for scene in chunk]
+        batch = torch.from_numpy(np.stack([p.image for p in placed]))
+        with torch.inference_mode():
+            x = batch.to(backend.device).permute(0, 3, 1, 2).flip(1).contiguous()
+            outputs = _nms(backend(x.float() / 255), s, getattr(backend, "end2end", False))
+        for scene, p, out in zip(chunk, placed, outputs, strict=True):
+            yield scene, prediction_text(p.boxes(out, canvas))
 
 
-def prediction_text(result: Any) -> str:
-    """One image's detections as ``class cx cy w h conf`` lines, normalised, 6 decimals, most
-    confident first (an empty text: no detection)."""
-    boxes = result.boxes
+def val_canvas(ratio_min: float, ratio_max: float, imgsz: int, stride: int) -> tuple[int, int]:
+    """``(height, width)`` of ``yolo val``'s canvas for a batch whose images' aspect ratios
+    (height / width) span ``ratio_min..ratio_max`` (``set_rectangle`` of Ultralytics'
+    ``BaseDataset`` with ``pad`` 0.5): e.g. 320×180 images at ``imgsz`` 320 → 224×352."""
+    shape = (1.0, 1.0)
+    if ratio_max < 1:
+        shape = (ratio_max, 1.0)
+    elif ratio_min > 1:
+        shape = (1.0, 1.0 / ratio_min)
+    h, w = (math.ceil(side * imgsz / stride + VAL_PAD) * stride for side in shape)
+    return h, w
+
+
+@dataclass(frozen=True)
+class _Placed:
+    """One image on its canvas: the pixels and how to map boxes back to the image."""
+
+    image: Any
+    """The canvas, BGR uint8 (height, width, 3)."""
+    shape: tuple[int, int]
+    """The image's own (height, width)."""
+    gain: tuple[float, float]
+    """Canvas pixels per image pixel, (vertical, horizontal)."""
+    pad: tuple[int, int]
+    """The image's offset on the canvas, (left, top)."""
+
+    def boxes(self, detections: Any, canvas: tuple[int, int]) -> Any:
+        """``detections`` (x1 y1 x2 y2 conf class on the canvas) as Ultralytics ``Boxes`` of the
+        image (clipped to it), as ``yolo val`` scales them."""
+        from ultralytics.engine.results import Boxes
+        from ultralytics.utils.ops import scale_boxes
+
+        detections = detections[:, :6].clone()
+        ratio_pad = (self.gain, self.pad)
+        detections[:, :4] = scale_boxes(canvas, detections[:, :4], self.shape, ratio_pad=ratio_pad)
+        return Boxes(detections, self.shape)
+
+
+def _letterbox(path: Path, imgsz: int, canvas: tuple[int, int]) -> _Placed:
+    """Read ``path`` and place it on ``canvas`` as ``yolo val`` does (``load_image`` of
+    Ultralytics' ``BaseDataset``, then ``LetterBox(scaleup=False)``)."""
+    import cv2
+
+    image = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    if image is None:
+        raise located(path, "cannot read the image")
+    h0, w0 = image.shape[:2]
+    r = imgsz / max(h0, w0)
+    if r != 1:  # long side to imgsz (up or down), as val's load_image
+        size = (min(math.ceil(w0 * r), imgsz), min(math.ceil(h0 * r), imgsz))
+        image = cv2.resize(image, size, interpolation=cv2.INTER_LINEAR)
+    h, w = image.shape[:2]
+    g = min(canvas[0] / h, canvas[1] / w, 1.0)  # never scaled up onto the canvas
+    if g != 1:
+        size = (max(round(w * g), 1), max(round(h * g), 1))
+        image = cv2.resize(image, size, interpolation=cv2.INTER_LINEAR)
+    dh, dw = (canvas[0] - image.shape[0]) / 2, (canvas[1] - image.shape[1]) / 2
+    top, bottom = round(dh - 0.1), round(dh + 0.1)
+    left, right = round(dw - 0.1), round(dw + 0.1)
+    image = cv2.copyMakeBorder(
+        image, top, bottom, left, right, cv2.BORDER_CONSTANT, value=(PAD_VALUE,) * 3
+    )
+    return _Placed(image, (h0, w0), (h / h0 * g, w / w0 * g), (left, top))
+
+
+def _image_size(path: Path) -> tuple[int, int]:
+    """``(height, width)`` of an image, from its header."""
+    from PIL import Image
+
+    try:
+        with Image.open(path) as image:
+            width, height = image.size
+    except OSError as exc:
+        raise located(path, f"cannot read the image ({exc})") from None
+    return height, width
+
+
+def _nms(raw: Any, settings: DetectorSettings, end2end: bool) -> list[Any]:
+    """Ultralytics' NMS as ``yolo val`` calls it: a box is kept once for every class above
+    ``conf`` (``multi_label``; an end-to-end model's output is only filtered); per image, rows
+    ``x1 y1 x2 y2 conf class``."""
+    try:
+        from ultralytics.utils.nms import non_max_suppression
+    except ImportError:  # Ultralytics before the nms module
+        from ultralytics.utils.ops import non_max_suppression
+    return non_max_suppression(
+        raw,
+        settings.conf,
+        settings.iou,
+        multi_label=True,
+        max_det=settings.max_det,
+        **({"end2end": True} if end2end else {}),
+    )
+
+
+def prediction_text(boxes: Any) -> str:
+    """One image's detections (Ultralytics ``Boxes``) as ``class cx cy w h conf`` lines,
+    normalised, 6 decimals, most confident first (an empty text: no detection)."""
     rows = zip(boxes.cls.tolist(), boxes.xywhn.tolist(), boxes.conf.tolist(), strict=True)
     lines = [
         f"{int(c)} {x:.6f} {y:.6f} {w:.6f} {h:.6f} {p:.6f}"
