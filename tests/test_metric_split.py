@@ -134,3 +134,15 @@ def test_model_without_ultralytics_says_how_to_install_it(split_dataset, tmp_pat
     assert main([*args, "--pred", str(tmp_path / "p"), "--out", str(tmp_path / "t")]) == 2
     err = capsys.readouterr().err
     assert "pip install 'seahaze[detect]'" in err and err.count("\n") == 1
+
+
+def test_model_letterboxes_into_yolo_vals_rectangle():
+    from seahaze.metric.detect import val_canvas
+
+    # ceil(side * imgsz / stride + 0.5) * stride, side 1 for the long side (Ultralytics 8.4)
+    assert val_canvas(180 / 320, 180 / 320, 320, 32) == (224, 352)  # predict: 192 x 320
+    assert val_canvas(36 / 64, 36 / 64, 64, 32) == (64, 96)
+    assert val_canvas(720 / 1280, 720 / 1280, 640, 32) == (384, 672)
+    assert val_canvas(1.0, 1.0, 640, 32) == (672, 672)
+    assert val_canvas(2.0, 2.0, 320, 32) == (352, 192)  # portrait
+    assert val_canvas(0.5, 2.0, 320, 32) == (352, 352)  # a batch of both: square

@@ -31,6 +31,10 @@ pytestmark = pytest.mark.skipif(
 ROOT = Path(__file__).resolve().parents[1]
 LEVELS = ("clean", "v0500", "v2000")
 IMGSZ = "64"
+AP_TOLERANCE = 0.005
+"""|seahaze's mAP50 − yolo val's| allowed on the same boxes: the two AP definitions differ
+(docs/metric.md), by 0.0020–0.0035 in the run of docs/detectors.md, and yolo val prints 3
+significant digits (±0.0005)."""
 GUARD = """\
 import socket, sys
 attempts = []
@@ -90,9 +94,12 @@ def run(env: dict[str, str], cwd: Path, tool: str, *args: str, code: int = 0) ->
     return text
 
 
-def yolo_val(env: dict[str, str], cwd: Path, weights: Path, data: str, split: str) -> str:
-    """``yolo val`` of ``weights`` on one split of a dataset YAML, without plots, on the CPU."""
-    args = [f"model={weights}", f"data={data}", f"split={split}", f"imgsz={IMGSZ}"]
+def yolo_val(
+    env: dict[str, str], cwd: Path, weights: Path, data: str, split: str, *more: str
+) -> str:
+    """``yolo val`` of ``weights`` on one split of a dataset YAML, without plots, on the CPU
+    (``more``: further ``key=value`` arguments)."""
+    args = [f"model={weights}", f"data={data}", f"split={split}", f"imgsz={IMGSZ}", *more]
     return run(env, cwd, "yolo", "val", *args, "plots=False", "device=cpu")
 
 
@@ -191,9 +198,7 @@ def _boxes(folder: Path) -> dict[str, list[list[float]]]:
     }
 
 
-def test_calibrate_with_a_model_writes_what_ultralytics_predict_writes(
-    data, weights, env, tmp_path
-):
+def test_calibrate_with_a_model_scores_the_boxes_yolo_val_scores(data, weights, env, tmp_path):
     pred, table = tmp_path / "pred", tmp_path / "table"
     text = run(
         env,
@@ -216,38 +221,26 @@ def test_calibrate_with_a_model_writes_what_ultralytics_predict_writes(
     doc = json.loads((table.with_suffix(".json")).read_text())
     assert doc["detector_run"]["conf"] == 0.001 and doc["detector_run"]["imgsz_used"] == 64
     assert [row["level"] for row in doc["levels"]] == ["v0500", "v2000"]
+    ours = {row["level"]: row["map50"] for row in doc["levels"]}
+    ours["clean"] = doc["clean"]["map50"]
     for level in LEVELS:
         assert sorted(p.stem for p in (pred / level).glob("*.txt")) == sorted(
             p.stem for p in (data / "images" / level).glob("*.png")
         )
-    # The documented manual route gives the same boxes (to the 6 decimals written).
-    run(
-        env,
-        tmp_path,
-        "yolo",
-        "predict",
-        f"model={weights}",
-        f"source={data / 'images/v0500'}",
-        "save_txt=True",
-        "save_conf=True",
-        "conf=0.001",
-        "iou=0.7",
-        "max_det=300",
-        f"imgsz={IMGSZ}",
-        "device=cpu",
-        f"project={tmp_path}",
-        "name=manual",
-        "save=False",
-    )
-    manual = _boxes(tmp_path / "manual" / "labels")
-    ours = _boxes(pred / "v0500")
-    assert manual and set(manual) <= set(ours)
-    for scene, boxes in ours.items():
-        expected = manual.get(scene, [])
-        assert len(boxes) == len(expected), scene
-        for a, b in zip(boxes, expected, strict=True):
-            assert a[0] == b[0]
-            assert all(abs(x - y) < 2e-6 for x, y in zip(a[1:], b[1:], strict=True))
+        # yolo val on the level, keeping its boxes: the same boxes (to the digits written) ...
+        args = ["save_txt=True", "save_conf=True", f"project={tmp_path / 'val'}", f"name={level}"]
+        text = yolo_val(env, tmp_path, weights, str(data / "data.yaml"), level, *args)
+        val = _boxes(tmp_path / "val" / level / "labels")
+        boxes = _boxes(pred / level)
+        assert set(val) <= set(boxes)
+        for scene, rows in boxes.items():
+            expected = val.get(scene, [])
+            assert len(rows) == len(expected), (level, scene)
+            for a, b in zip(rows, expected, strict=True):
+                assert a[0] == b[0]
+                assert all(abs(x - y) < 2e-6 for x, y in zip(a[1:], b[1:], strict=True))
+        # ... and the same mAP50, up to the AP definitions (docs/detectors.md)
+        assert ours[level] == pytest.approx(_val_row(text)[2], abs=AP_TOLERANCE), level
 
 
 def test_newvis_with_a_model_runs_it_on_restored_images(data, weights, env, tmp_path):
