@@ -338,8 +338,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     model = {
         "type": Path,
         "metavar": "WEIGHTS.pt",
-        "help": "a trained Ultralytics detector: run it first (confidence 0.001, IoU 0.7, 300 "
-        "detections, its training image size) and write PRED_DIR's files "
+        "help": "a trained Ultralytics detector: run it first as yolo val runs it (confidence "
+        "0.001, IoU 0.7, 300 detections, its training image size) and write PRED_DIR's files "
         "(needs pip install 'seahaze[detect]'; docs/detectors.md)",
     }
     max_dets = {
