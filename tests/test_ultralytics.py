@@ -295,7 +295,7 @@ def test_data_yaml_levels_are_absolute(data):
     assert all(Path(doc[level]).is_absolute() for level in LEVELS)
 
 
-def test_a_model_with_other_classes_or_a_missing_device_is_one_line_exit_2(
+def test_other_classes_an_exported_model_or_a_missing_device_is_one_line_exit_2(
     data, weights, env, tmp_path
 ):
     args = ["metric", "calibrate", "--dataset", str(data), "--pred", str(tmp_path / "p")]
@@ -313,4 +313,8 @@ def test_a_model_with_other_classes_or_a_missing_device_is_one_line_exit_2(
     text = run(env, tmp_path, "seahaze", *args, str(weights), code=2)
     assert "the model's classes are not the dataset's" in text
     assert "class 0 is 'container_ship' in the model, 'cargo' in the dataset" in text
+    exported = tmp_path / "w.onnx"  # --model letterboxes as val does for PyTorch models only
+    exported.write_text("not read")
+    text = run(env, tmp_path, "seahaze", *args, str(exported), code=2)
+    assert "w.onnx: not a PyTorch model; give the trained .pt file" in text
     assert not list((tmp_path / "p").rglob("*.txt"))
