@@ -102,3 +102,39 @@ def dataset(tmp_path_factory):
     ]
     assert main(args) == 0
     return out
+
+
+SPLIT_TEMPLATE = """\
+name: tiny
+camera: {height_m: 12, pitch_deg: -2, resolution: [64, 36]}
+sun: {elevation_deg: 30, azimuth_deg: 140}
+sea: {quality: low, seed: 99}
+vessels:
+  sample: {count: 3, distance_m: [120, 900], seed: 5}
+haze: {levels: [500, 2000]}
+render: {spp: 1, airlight_spp: 16, seed: 3}
+variation:
+  camera_heading_deg: [-30, 30]
+"""
+SPLIT_SCENES = 6
+SPLIT_FRACTIONS = "0.5,0.25,0.25"
+
+
+@pytest.fixture(scope="session")
+def split_template(tmp_path_factory):
+    """A tiny scene file (64×36 px, 1 spp, levels 500 and 2000 m) for split and export tests."""
+    path = tmp_path_factory.mktemp("split_scene") / "tiny.yaml"
+    path.write_text(SPLIT_TEMPLATE)
+    return path
+
+
+@pytest.fixture(scope="session")
+def split_dataset(split_template, tmp_path_factory):
+    """SPLIT_SCENES scenes of the tiny template rendered with --split 0.5,0.25,0.25 (read-only:
+    copy it before changing it)."""
+    from seahaze.cli import main
+
+    out = tmp_path_factory.mktemp("split_ds")
+    args = ["render", str(split_template), "--scenes", str(SPLIT_SCENES), "--split"]
+    assert main([*args, SPLIT_FRACTIONS, "--out", str(out), "--quiet"]) == 0
+    return out

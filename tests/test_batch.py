@@ -455,7 +455,7 @@ def test_ci_dataset_regenerates_and_validates(tmp_path):
     levels = ["clean"] + [level["name"] for level in manifest["levels"]]
     assert len(levels) == 12 and set(_statuses(out).values()) == {"done"}
     data = yaml.safe_load((out / "data.yaml").read_text())
-    assert all(data[level] == f"images/{level}" for level in levels[1:])
+    assert all(data[level] == str(out.resolve() / "images" / level) for level in levels)
     assert data["names"] == dict(enumerate(CLASS_NAMES))
     boxes = 0
     for name in manifest["scenes"]:

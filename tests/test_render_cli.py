@@ -39,8 +39,9 @@ def test_labels_are_identical_at_every_level(dataset):
 def test_data_yaml_has_names_and_one_split_per_level(dataset):
     data = yaml.safe_load((dataset / "data.yaml").read_text())
     assert Path(data["path"]).is_absolute() and data["train"] == "images/clean"
-    for level in LEVELS:
-        assert data[level] == f"images/{level}"
+    for level in ["clean", *LEVELS]:
+        # Absolute: Ultralytics resolves only train/val/test against 'path' (issue 18).
+        assert data[level] == str(dataset.resolve() / "images" / level)
     assert data["names"][0] == "container_ship"
 
 

@@ -3,7 +3,10 @@
 Every scene file (a *template*) gives one scene, or with ``count`` (``seahaze render --scenes
 N``) N scenes named ``<template>_00000`` …, scene ``i`` drawing its camera heading, sun, sea
 state and vessel layout from the template's ``variation:`` ranges with a seed derived from
-(master seed, template name, ``i``) (:func:`seahaze.seeds.scene_seed`).
+(master seed, template name, ``i``) (:func:`seahaze.seeds.scene_seed`). With ``split``
+fractions every scene also gets its train/val/test split from (master seed, scene name) alone
+(:meth:`seahaze.dataset.splits.SplitFractions.split_of`), so the scenes of a grown batch keep
+theirs.
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..dataset.splits import SplitFractions
 from ..seeds import scene_seed, variation_rng
 from ..spec import SceneSpec
 from .errors import DatasetError
@@ -35,20 +39,26 @@ class SceneJob:
     spec: SceneSpec
     template: str
     index: int | None = None
+    split: str | None = None
+    """``train``, ``val`` or ``test``; None in a dataset made without ``--split``."""
 
     def images(self) -> int:
         """Images this scene writes: clean plus one per level."""
         return 1 + len(self.spec.haze.levels)
 
     def entry(self, status: str) -> dict[str, Any]:
-        """This scene's record in ``dataset.json``."""
-        return {
+        """This scene's record in ``dataset.json`` (``split`` only when the batch has one, so a
+        dataset made without ``--split`` keeps the manifest it always had)."""
+        entry: dict[str, Any] = {
             "status": status,
             "seed": self.spec.render.seed,
             "template": self.template,
             "index": self.index,
-            "config": self.spec.model_dump(mode="json", by_alias=True),
         }
+        if self.split is not None:
+            entry["split"] = self.split
+        entry["config"] = self.spec.model_dump(mode="json", by_alias=True)
+        return entry
 
 
 @dataclass(frozen=True)
@@ -60,22 +70,27 @@ class BatchPlan:
     threshold: str
     count: int | None = None
     master_seeds: dict[str, int] = field(default_factory=dict)
+    split: SplitFractions | None = None
 
     def config(self) -> dict[str, Any]:
-        """The manifest's ``config``: dataset-wide settings and, for ``--scenes``, the batch."""
+        """The manifest's ``config``: dataset-wide settings, for ``--scenes`` the batch, and for
+        ``--split`` the fractions (absent without: the config of older folders is unchanged)."""
         first = self.jobs[0].spec
         batch = (
             None
             if self.count is None
             else {"scenes_per_template": self.count, "master_seeds": dict(self.master_seeds)}
         )
-        return {
+        config: dict[str, Any] = {
             "threshold": self.threshold,
             "mode": first.render.mode,
             "spp": first.render.spp,
             "resolution": list(first.camera.resolution),
             "batch": batch,
         }
+        if self.split is not None:
+            config["split"] = self.split.as_dict()
+        return config
 
 
 def vary_scene(spec: SceneSpec, seed: int) -> SceneSpec:
@@ -109,13 +124,16 @@ def plan_scenes(
     templates: Sequence[tuple[SceneSpec, str]],
     count: int | None = None,
     master_seed: int | None = None,
+    split: SplitFractions | None = None,
 ) -> BatchPlan:
     """The scenes of a batch, in canonical order: templates in the given order, then index.
 
     ``count`` None: one scene per template, as written. ``count`` N: N scenes per template named
     ``<template>_<i>`` (5 digits or more), each with :func:`seahaze.seeds.scene_seed` of the
     master seed (``master_seed``, else the template's ``render.seed``) and :func:`vary_scene`
-    applied. Raises :class:`DatasetError` for scenes that cannot share one dataset.
+    applied. With ``split``, each scene's split comes from its master seed (the batch's, else
+    its own ``render.seed``) and its name. Raises :class:`DatasetError` for scenes that cannot
+    share one dataset.
     """
     if not templates:
         raise DatasetError("no scene to render")
@@ -134,7 +152,9 @@ def plan_scenes(
     jobs: list[SceneJob] = []
     seeds: dict[str, int] = {}
     if count is None:
-        jobs = [SceneJob(name, spec, name) for spec, name in templates]
+        for spec, name in templates:
+            scene_split = split.split_of(spec.render.seed, name) if split else None
+            jobs.append(SceneJob(name, spec, name, None, scene_split))
     else:
         width = max(5, len(str(count - 1)))
         for spec, name in templates:
@@ -142,11 +162,15 @@ def plan_scenes(
             seeds[name] = master
             for i in range(count):
                 seed = scene_seed(master, name, i)
-                jobs.append(SceneJob(f"{name}_{i:0{width}d}", vary_scene(spec, seed), name, i))
+                scene = f"{name}_{i:0{width}d}"
+                scene_split = split.split_of(master, scene) if split else None
+                jobs.append(SceneJob(scene, vary_scene(spec, seed), name, i, scene_split))
     counts = Counter(job.name for job in jobs)
     duplicates = sorted(name for name, n in counts.items() if n > 1)
     if duplicates:
         raise DatasetError(
             f"two scenes share the name(s) {duplicates[:5]}; set 'name:' in the YAML"
         )
-    return BatchPlan(tuple(jobs), tuple(first.haze.levels), str(first.haze.threshold), count, seeds)
+    return BatchPlan(
+        tuple(jobs), tuple(first.haze.levels), str(first.haze.threshold), count, seeds, split
+    )

@@ -38,7 +38,9 @@ from pathlib import Path
 from typing import Any, Literal
 
 from .. import __version__
-from ..dataset import Layout, data_yaml_text, level_entries, manifest
+from ..dataset import Layout, data_yaml_text, level_entries, manifest, split_list_text
+from ..dataset.card import remove_card, write_card
+from ..dataset.splits import SPLIT_NAMES
 from ..fileio import write_json, write_text
 from ..metric.errors import MetricInputError
 from ..metric.ground_truth import write_coco
@@ -216,12 +218,13 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
             f"resuming: {ledger.done_before} of {len(plan.jobs)} scenes already done, "
             f"{pending} to render"
         )
-    write_text(ledger.layout.data_yaml, data_yaml_text(root, level_names, CLASS_NAMES))
+    write_split_files(ledger, existing, level_names, reporter)
     ledger.write_manifest()
     if pending:
-        # COCO files describe every scene of a level: stale until the last scene is done.
+        # COCO files and the card describe every scene: stale until the last scene is done.
         for level in [CLEAN_LEVEL, *level_names]:
             ledger.layout.coco(level).unlink(missing_ok=True)
+        remove_card(root)
     return ledger
 
 
@@ -276,6 +279,40 @@ def _refuse_strays_and_blocked(
                 )
 
 
+def write_split_files(
+    ledger: SceneLedger,
+    existing: dict[str, Any] | None,
+    level_names: list[str],
+    reporter: Reporter,
+) -> None:
+    """Write ``data.yaml`` and, with a split, each split's image list; delete the lists of
+    splits the folder's previous config had and this one has not."""
+    layout, split = ledger.layout, ledger.plan.split
+    fractions = split.as_dict() if split else {}
+    names = [name for name in SPLIT_NAMES if fractions.get(name, 0) > 0]
+    write_text(layout.data_yaml, data_yaml_text(layout.root, level_names, CLASS_NAMES, names))
+    members: dict[str, list[str]] = {name: [] for name in names}
+    for job in ledger.plan.jobs:
+        if job.split is not None:
+            members[job.split].append(job.name)
+    for name, scenes in members.items():
+        write_text(layout.split_list(name), split_list_text(scenes))
+        if not scenes:
+            reporter.warn(
+                f"split '{name}' ({fractions[name]:g}) has none of the {len(ledger.plan.jobs)} "
+                f"scene(s): {layout.split_list(name).name} is empty; render more scenes or "
+                "change --split"
+            )
+    before = ((existing or {}).get("config") or {}).get("split") or {}
+    for name in SPLIT_NAMES:
+        if before.get(name, 0) > 0 and name not in members:
+            layout.split_list(name).unlink(missing_ok=True)
+
+
+def _without_split(entry: dict[str, Any]) -> dict[str, Any]:
+    return {k: v for k, v in entry.items() if k != "split"}
+
+
 def _mark_done_scenes(
     ledger: SceneLedger,
     old_scenes: dict[str, Any],
@@ -285,7 +322,10 @@ def _mark_done_scenes(
     """Mark ``done`` the scenes the folder holds, finished, with the planned config."""
     for job in ledger.plan.jobs:
         old = old_scenes.get(job.name) or {}
-        same = comparable(old) == comparable(planned_scenes[job.name])
+        # A scene's split is bookkeeping, not rendering: a new split keeps its files.
+        same = _without_split(comparable(old)) == _without_split(
+            comparable(planned_scenes[job.name])
+        )
         if not (same and old.get("status") == "done"):
             continue
         levels = [level_name(v) for v in job.spec.haze.levels]
@@ -378,6 +418,10 @@ def finish(
         ledger.write_manifest()
         if all(s == "done" for s in ledger.status.values()):
             write_coco(ledger.layout.root)
+            if not write_card(ledger.layout.root):
+                reporter.warn(
+                    f"{ledger.layout.card} was not written by seahaze: kept, no dataset card"
+                )
     except OSError as err:
         if stop is None or stop[0] != "write_error":
             stop = ("write_error", f"cannot write the manifest or COCO files: {err}")

@@ -12,7 +12,7 @@ import sys
 
 from .. import __version__
 from ..metric import cli as metric_cli
-from . import render, tools, verify
+from . import export, render, tools, verify
 from .common import UsageError
 
 __all__ = ["UsageError", "build_parser", "main"]
@@ -28,6 +28,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     render.add_parser(sub)
+    export.add_parser(sub)
     tools.add_parsers(sub)
     verify.add_parser(sub)
     metric_cli.register(sub)

@@ -165,6 +165,7 @@ def cmd_render(args: argparse.Namespace) -> int:
         plan_scenes,
         run_batch,
     )
+    from ..dataset.splits import SplitError, SplitFractions
     from ..render.variant import VariantError, select_variant
     from ..spec import OverrideError, with_overrides
 
@@ -176,6 +177,10 @@ def cmd_render(args: argparse.Namespace) -> int:
     resolution = parse_res(args.res) if args.res is not None else None
     if args.spp is not None and args.spp < 1:
         raise UsageError(f"--spp {args.spp}: must be >= 1")
+    try:
+        split = SplitFractions.parse(args.split) if args.split is not None else None
+    except SplitError as err:
+        raise UsageError(f"--split {args.split!r}: {err}") from None
     scenes = []
     for spec, name in load_scenes(paths):
         try:
@@ -199,7 +204,7 @@ def cmd_render(args: argparse.Namespace) -> int:
 
     def make_plan() -> Any:
         try:
-            return plan_scenes(scenes, args.count)
+            return plan_scenes(scenes, args.count, split=split)
         except DatasetError as err:
             raise UsageError(str(err)) from None
 
@@ -313,6 +318,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="render N scenes per scene file, named <scene>_00000 ...; scene i draws camera "
         "heading, sun, sea and vessel layout from the file's 'variation:' ranges with a seed "
         "derived from (--seed, scene name, i) (default: one scene per file, as written)",
+    )
+    parser.add_argument(
+        "--split",
+        metavar="TRAIN,VAL,TEST",
+        help="scene-disjoint train/val/test splits, e.g. 0.8,0.1,0.1: each scene's split comes "
+        "from a hash of (master seed, scene name), so a scene keeps it when the batch grows; "
+        "recorded in dataset.json, used by data.yaml (train.txt, val.txt, test.txt) and by "
+        "'seahaze export' (default: no split; train and val are every clean image)",
     )
     parser.add_argument(
         "--workers",

@@ -4,7 +4,8 @@ OUT/data.yaml  OUT/dataset.json
 OUT/images/clean/<scene>.png       OUT/images/v0300/<scene>.png ...
 OUT/labels/<level>/<scene>.txt     OUT/depth/<scene>.exr
 OUT/exr/<level>/<scene>.exr        OUT/meta/<scene>.json
-OUT/coco/<level>.json
+OUT/coco/<level>.json              OUT/README.md (the dataset card)
+OUT/train.txt OUT/val.txt OUT/test.txt (with --split: Ultralytics lists of the clean images)
 """
 
 from __future__ import annotations
@@ -46,6 +47,14 @@ class Layout:
     @property
     def manifest(self) -> Path:
         return self.root / "dataset.json"
+
+    @property
+    def card(self) -> Path:
+        return self.root / "README.md"
+
+    def split_list(self, split: str) -> Path:
+        """The Ultralytics list of the clean images of one split (``train.txt`` …)."""
+        return self.root / f"{split}.txt"
 
     def scene_files(self, scene: str, hazy_levels: list[str], exr: bool) -> list[Path]:
         """Every file one scene writes: meta, depth, and per level (clean first) its image,

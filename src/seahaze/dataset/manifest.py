@@ -1,7 +1,11 @@
-"""The dataset-wide files: the ``dataset.json`` manifest and the Ultralytics ``data.yaml``."""
+"""The dataset-wide files: the ``dataset.json`` manifest, the Ultralytics ``data.yaml`` and its
+split lists."""
 
 from __future__ import annotations
 
+import hashlib
+import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -36,24 +40,61 @@ def level_entries(visibilities_m: list[float], threshold: Threshold | str) -> li
     return entries
 
 
-def data_yaml_text(root: Path, level_names: list[str], class_names: tuple[str, ...]) -> str:
-    """Ultralytics dataset YAML: absolute root, ``train``/``val`` = clean, one split per level.
+def data_yaml_text(
+    root: Path,
+    level_names: list[str],
+    class_names: tuple[str, ...],
+    split_names: Sequence[str] = (),
+) -> str:
+    """Ultralytics dataset YAML: absolute root, train/val(/test), one split per level (clean
+    included).
 
-    Ultralytics resolves a relative ``path`` against its own datasets folder, so the root is
-    written absolute.
+    Without ``split_names`` (a dataset made without ``--split``) ``train`` and ``val`` are every
+    clean image; with them each is its list file (``train: train.txt``, :func:`split_list_text`).
+    Every level is a split of its own with an absolute folder, every scene of the level: Ultralytics
+    resolves only ``train``/``val``/``test``/``minival`` against ``path`` (any other split is taken
+    relative to the working directory) and finds an image's labels only through an ``/images/``
+    component of its path. A relative ``path`` is resolved against Ultralytics' datasets folder,
+    so the root is written absolute too.
     """
-    data: dict[str, Any] = {
-        "path": str(root.resolve()),
-        "train": f"images/{CLEAN_LEVEL}",
-        "val": f"images/{CLEAN_LEVEL}",
-    }
-    for name in level_names:
-        data[name] = f"images/{name}"
+    root = root.resolve()
+    data: dict[str, Any] = {"path": str(root)}
+    if split_names:
+        data.update({name: f"{name}.txt" for name in split_names})
+    else:
+        data.update({"train": f"images/{CLEAN_LEVEL}", "val": f"images/{CLEAN_LEVEL}"})
+    for name in [CLEAN_LEVEL, *level_names]:
+        data[name] = str(root / "images" / name)
     data["names"] = dict(enumerate(class_names))
+    splits = "train/val/test: scene-disjoint splits" if split_names else "train/val: every scene"
     return (
-        "# seahaze dataset: one split per visibility level (see dataset.json)\n"
+        f"# seahaze dataset ({splits}); one split per visibility level, every scene\n"
+        "# e.g. yolo val model=WEIGHTS.pt data=THIS_FILE split=v1000 (see README.md)\n"
         + yaml.safe_dump(data, sort_keys=False)
     )
+
+
+def split_list_text(scenes: Sequence[str]) -> str:
+    """An Ultralytics image list of the clean images of ``scenes``: one line
+    ``./images/clean/<scene>.png`` each. Ultralytics resolves a leading ``./`` against the list's
+    own folder (the convention of its COCO ``train2017.txt``), so the list stays valid when the
+    dataset folder moves."""
+    return "".join(f"./images/{CLEAN_LEVEL}/{scene}.png\n" for scene in scenes)
+
+
+def config_hash(data: dict[str, Any]) -> str:
+    """A short SHA-256 of what a dataset's content depends on: the manifest's format version,
+    config, levels, classes and every scene's record (without its ``status`` and ``error``).
+
+    Two folders with the same hash were made from the same configuration.
+    """
+    scenes = {
+        name: {k: v for k, v in entry.items() if k not in ("status", "error")}
+        for name, entry in (data.get("scenes") or {}).items()
+    }
+    content = {key: data.get(key) for key in ("format_version", "config", "levels", "classes")}
+    text = json.dumps({**content, "scenes": scenes}, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
 
 def manifest(

@@ -2,7 +2,8 @@
 
 The main CLI calls :func:`register` with its subparsers and then ``args.func(args)``; every
 handler returns an exit code: 0 on success, 2 on bad input (one line on stderr, no traceback).
-All logic lives in :mod:`seahaze.metric.table` and :mod:`seahaze.metric.evaluate`.
+All logic lives in :mod:`seahaze.metric.table`, :mod:`seahaze.metric.evaluate` and, for a
+detector in the loop (``--model``), :mod:`seahaze.metric.detect`.
 """
 
 from __future__ import annotations
@@ -13,19 +14,28 @@ import sys
 from collections.abc import Callable
 from functools import wraps
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from seahaze.metric.errors import MetricInputError
 from seahaze.metric.evaluate import (
     DEFAULT_MAX_DETS,
     LevelResult,
     calibrate,
+    check_calibratable,
     evaluate_level,
     evaluator_name,
     format_score,
     same_evaluator,
 )
 from seahaze.metric.evaluate import evaluate_dataset as evaluate_levels
-from seahaze.metric.reader import level_visibility_m, load_dataset, parse_level
+from seahaze.metric.reader import (
+    Dataset,
+    dehazed_images,
+    level_visibility_m,
+    load_dataset,
+    parse_level,
+    scene_images,
+)
 from seahaze.metric.table import (
     Bound,
     CalibrationTable,
@@ -37,6 +47,9 @@ from seahaze.metric.table import (
     save_table,
 )
 from seahaze.visibility import CLEAN_LEVEL
+
+if TYPE_CHECKING:  # imported on demand: it is the only module that needs Ultralytics
+    from seahaze.metric.detect import Detector
 
 Handler = Callable[[argparse.Namespace], int]
 EXIT_INPUT = 2
@@ -84,10 +97,6 @@ def _warn_non_monotone(table: CalibrationTable) -> None:
         )
 
 
-# --------------------------------------------------------------------------------------------
-# eval
-
-
 def _results_table(results: list[LevelResult]) -> list[str]:
     lines = [
         f"{'level':<8}{'vis_m':>7}{'images':>8}{'objects':>9}{'dets':>8}"
@@ -118,10 +127,43 @@ def _result_json(r: LevelResult) -> dict[str, object]:
     }
 
 
+# --------------------------------------------------------------------------------------------
+# a detector in the loop (--model)
+
+
+def _detector(args: argparse.Namespace, dataset: Dataset) -> Detector:
+    """The ``--model`` detector with the ``--imgsz``/``--device``/``--batch`` settings."""
+    from seahaze.metric.detect import DetectorSettings, load_detector
+
+    settings = DetectorSettings(imgsz=args.imgsz, device=args.device, batch=args.batch)
+    return load_detector(args.model, dataset.names, settings)
+
+
+def _run_detector(
+    args: argparse.Namespace, dataset: Dataset, folders: dict[str, dict[str, Path]]
+) -> dict[str, object]:
+    """Run ``--model`` on ``folders`` (prediction folder → scene → image), writing the
+    predictions under ``--pred``; returns what the table records about the run."""
+    from seahaze.metric.detect import write_predictions
+
+    detector = _detector(args, dataset)
+    images = sum(len(v) for v in folders.values())
+    detections = write_predictions(detector, folders, args.pred)
+    print(
+        f"{detector.weights.name}: {detections} detections on {images} images "
+        f"(conf >= {detector.settings.conf:g}, imgsz {detector.imgsz}) written to {args.pred}"
+    )
+    return detector.describe()
+
+
+# --------------------------------------------------------------------------------------------
+# eval
+
+
 @_guarded("eval")
 def cmd_eval(args: argparse.Namespace) -> int:
     """``seahaze metric eval``: mAP50 and mAP50-95 per level."""
-    dataset = load_dataset(args.dataset)
+    dataset = load_dataset(args.dataset, args.split)
     level = parse_level(args.level) if args.level else None
     results = evaluate_levels(dataset, args.pred, level=level, max_dets=args.max_dets)
     if args.json:
@@ -146,9 +188,20 @@ def cmd_eval(args: argparse.Namespace) -> int:
 
 @_guarded("calibrate")
 def cmd_calibrate(args: argparse.Namespace) -> int:
-    """``seahaze metric calibrate``: the detector's level → mAP50 table, saved as CSV + JSON."""
-    dataset = load_dataset(args.dataset)
-    table, results = calibrate(dataset, args.pred, args.detector, max_dets=args.max_dets)
+    """``seahaze metric calibrate``: the detector's level → mAP50 table, saved as CSV + JSON;
+    with ``--model`` the detector first predicts every level into ``--pred``."""
+    dataset = load_dataset(args.dataset, args.split)
+    detector = args.detector or (args.model.stem if args.model else None)
+    if detector is None:
+        raise MetricInputError("--detector NAME is needed without --model (e.g. yolo11n)")
+    check_calibratable(dataset, detector)
+    run = None
+    if args.model is not None:
+        folders = {level: scene_images(dataset, level) for level in dataset.levels}
+        run = _run_detector(args, dataset, folders)
+    table, results = calibrate(dataset, args.pred, detector, max_dets=args.max_dets)
+    if run is not None:
+        table.extra["detector_run"] = run
     csv_path, json_path = save_table(table, args.out)
     print("\n".join(_results_table(results)))
     print(
@@ -168,6 +221,8 @@ def cmd_newvis(args: argparse.Namespace) -> int:
     """``seahaze metric newvis``: New Visibility, gain and regulation class of a restored mAP50."""
     if (args.map is None) == (args.pred is None):
         raise MetricInputError("give either --map VALUE or --pred DIR (with --dataset and --level)")
+    if (args.model is None) != (args.images is None):
+        raise MetricInputError("--model and --images go together (with --pred, --dataset, --level)")
     table = load_table(args.table)
     level = parse_level(args.level) if args.level else None
     if level == CLEAN_LEVEL:
@@ -179,7 +234,10 @@ def cmd_newvis(args: argparse.Namespace) -> int:
     if args.pred is not None:
         if args.dataset is None or level is None:
             raise MetricInputError("--pred needs --dataset DIR and --level (e.g. v0800)")
-        dataset = load_dataset(args.dataset)
+        dataset = load_dataset(args.dataset, args.split)
+        if args.model is not None:
+            folders = {level: dehazed_images(args.images, dataset, level)}
+            _run_detector(args, dataset, folders)
         scores = evaluate_level(
             dataset, level, args.pred, allow_flat=True, max_dets=args.max_dets
         ).scores
@@ -244,6 +302,22 @@ def _cmd_help(parser: argparse.ArgumentParser) -> Handler:
     return run
 
 
+def _add_detector_flags(parser: argparse.ArgumentParser) -> None:
+    """``--imgsz``, ``--device`` and ``--batch`` of a ``--model`` run."""
+    parser.add_argument(
+        "--imgsz",
+        type=int,
+        metavar="N",
+        help="with --model: inference size in pixels (default: the model's training size)",
+    )
+    parser.add_argument(
+        "--device", metavar="DEV", help="with --model: cpu, 0, cuda:0 … (default: Ultralytics')"
+    )
+    parser.add_argument(
+        "--batch", type=int, default=16, metavar="N", help="with --model: images per batch (16)"
+    )
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Add the ``metric`` command (eval, calibrate, newvis) to the main CLI's subparsers."""
     metric = subparsers.add_parser(
@@ -256,6 +330,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     metric.set_defaults(func=_cmd_help(metric))
     sub = metric.add_subparsers(dest="metric_command", metavar="{eval,calibrate,newvis}")
 
+    split = {
+        "metavar": "NAME",
+        "help": "only the scenes of this split of dataset.json (train, val, test; default: "
+        "every scene, the paper's protocol)",
+    }
+    model = {
+        "type": Path,
+        "metavar": "WEIGHTS.pt",
+        "help": "a trained Ultralytics detector: run it first as yolo val runs it (confidence "
+        "0.001, IoU 0.7, 300 detections, its training image size) and write PRED_DIR's files "
+        "(needs pip install 'seahaze[detect]'; docs/detectors.md)",
+    }
     max_dets = {
         "type": int,
         "default": DEFAULT_MAX_DETS,
@@ -286,6 +372,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
         help="predictions: PRED_DIR/<level>/<scene>.txt (or PRED_DIR/<scene>.txt with --level)",
     )
     ev.add_argument("--level", help="only this level (v1000, 1000 or clean)")
+    ev.add_argument("--split", **split)
     ev.add_argument("--max-dets", **max_dets)
     ev.add_argument("--json", action="store_true", help="print JSON instead of a table")
     ev.set_defaults(func=cmd_eval)
@@ -304,14 +391,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
         type=Path,
         metavar="PRED_DIR",
         help="the detector's predictions on the hazy images: "
-        "PRED_DIR/<level>/<scene>.txt for every level",
+        "PRED_DIR/<level>/<scene>.txt for every level (written there with --model)",
     )
     cal.add_argument(
         "--detector",
-        required=True,
         metavar="NAME",
-        help="detector name stored in the table (e.g. yolo11n)",
+        help="detector name stored in the table (e.g. yolo11n; default with --model: the "
+        "weights file's name without suffix)",
     )
+    cal.add_argument("--model", **model)
+    _add_detector_flags(cal)
+    cal.add_argument("--split", **split)
     cal.add_argument(
         "--out", required=True, type=Path, metavar="T", help="output path; writes T.csv and T.json"
     )
@@ -337,6 +427,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     )
     nv.add_argument("--dataset", type=Path, metavar="DIR", help="dataset for --pred")
     nv.add_argument("--level", help="visibility of the hazy input (800 or v0800)")
+    nv.add_argument("--model", **model)
+    nv.add_argument(
+        "--images",
+        type=Path,
+        metavar="DIR",
+        help="with --model: the restored images of --level, named <scene>.png or "
+        "<scene>_<level>.png; the predictions go to PRED_DIR/<level>/",
+    )
+    _add_detector_flags(nv)
+    nv.add_argument("--split", **split)
     nv.add_argument("--max-dets", **max_dets)
     nv.add_argument("--json", action="store_true", help="print JSON")
     nv.set_defaults(func=cmd_newvis)

@@ -26,6 +26,7 @@ from seahaze.metric.reader import (
     level_visibility_m,
     load_level_truth,
     load_predictions,
+    outside_split,
     prediction_dir,
     sort_levels,
 )
@@ -196,7 +197,8 @@ def evaluate_level(
         )
     truth = load_level_truth(dataset, level)
     folder = prediction_dir(pred_root, level, allow_flat=allow_flat)
-    preds = load_predictions(folder, (t.name for t in truth), len(dataset.names))
+    skipped = outside_split(dataset, level)
+    preds = load_predictions(folder, (t.name for t in truth), len(dataset.names), skipped)
     scores = coco_scores(truth, preds, dataset.names, max_dets=max_dets)
     return LevelResult(level, level_visibility_m(level), scores, folder)
 
@@ -237,6 +239,18 @@ def evaluate_dataset(
     return [evaluate_level(dataset, lv, pred_root, max_dets=max_dets) for lv in levels]
 
 
+def check_calibratable(dataset: Dataset, detector: str) -> None:
+    """Raise :class:`MetricInputError` unless a table can be built: a detector name and at
+    least 2 hazy levels (checked before a detector runs on every level)."""
+    if not detector.strip():
+        raise MetricInputError("--detector must name the detector (e.g. yolo11n)")
+    hazy = dataset.hazy_levels
+    if len(hazy) < 2:
+        raise located(
+            dataset.root / "images", f"calibration needs at least 2 hazy levels, found {len(hazy)}"
+        )
+
+
 def calibrate(
     dataset: Dataset, pred_root: Path | str, detector: str, *, max_dets: int = DEFAULT_MAX_DETS
 ) -> tuple[CalibrationTable, list[LevelResult]]:
@@ -246,13 +260,8 @@ def calibrate(
     Every hazy level needs ``pred_root/<level>/`` (a missing folder is an error, not a zero);
     the clean level is scored too when its folder exists and is kept in the JSON as a reference.
     """
-    if not detector.strip():
-        raise MetricInputError("--detector must name the detector (e.g. yolo11n)")
+    check_calibratable(dataset, detector)
     hazy = dataset.hazy_levels
-    if len(hazy) < 2:
-        raise located(
-            dataset.root / "images", f"calibration needs at least 2 hazy levels, found {len(hazy)}"
-        )
     results = [evaluate_level(dataset, lv, pred_root, max_dets=max_dets) for lv in hazy]
     points = []
     for r in results:
@@ -272,7 +281,7 @@ def calibrate(
                 detections=r.scores.detections,
             )
         )
-    extra: dict[str, object] = {}
+    extra: dict[str, object] = {} if dataset.split is None else {"split": dataset.split}
     if CLEAN_LEVEL in dataset.levels and (Path(pred_root) / CLEAN_LEVEL).is_dir():
         clean = evaluate_level(dataset, CLEAN_LEVEL, pred_root, max_dets=max_dets)
         results.insert(0, clean)

@@ -8,11 +8,13 @@ Dataset layout (written by the renderer)::
 
 A prediction folder mirrors the labels: ``PRED/<level>/<scene>.txt`` with
 ``class cx cy w h conf`` lines, or ``PRED/<scene>.txt`` for a single level. A missing prediction
-file means no detections for that image.
+file means no detections for that image. A dataset opened with a split (``--split test``) holds
+only the scenes ``dataset.json`` puts in that split.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from collections.abc import Iterable, Mapping
@@ -22,6 +24,7 @@ from pathlib import Path
 import yaml
 from PIL import Image, UnidentifiedImageError
 
+from seahaze.dataset.splits import scene_splits, split_order
 from seahaze.metric.errors import MetricInputError, located
 from seahaze.visibility import CLEAN_LEVEL, is_level_name, level_name
 
@@ -175,6 +178,10 @@ class Dataset:
     names: tuple[str, ...]
     levels: tuple[str, ...]
     """Level folders under ``images/``: ``clean`` first, then by increasing visibility."""
+    split: str | None = None
+    """The split the dataset was opened with (None: every scene)."""
+    members: frozenset[str] | None = None
+    """The scenes of ``split`` (None: every scene)."""
 
     def image_dir(self, level: str) -> Path:
         """``root/images/<level>``."""
@@ -212,10 +219,12 @@ def _class_names(path: Path, doc: object) -> tuple[str, ...]:
     raise located(path, "missing 'names' (a list or a {0: name, 1: ...} mapping of classes)")
 
 
-def load_dataset(root: Path | str) -> Dataset:
-    """Open a dataset folder: class names from ``data.yaml``, levels from ``images/``.
+def load_dataset(root: Path | str, split: str | None = None) -> Dataset:
+    """Open a dataset folder: class names from ``data.yaml``, levels from ``images/``; with
+    ``split``, only the scenes ``dataset.json`` puts in that split.
 
-    Raises :class:`MetricInputError` if ``data.yaml`` or ``images/`` is missing or unusable.
+    Raises :class:`MetricInputError` if ``data.yaml`` or ``images/`` is missing or unusable, or
+    the dataset has no such split.
     """
     root = Path(root)
     if not root.is_dir():
@@ -237,7 +246,22 @@ def load_dataset(root: Path | str) -> Dataset:
     levels = sort_levels(p.name for p in images.iterdir() if p.is_dir() and is_level_name(p.name))
     if not levels:
         raise located(images, "no level folders (clean, v0300, v0400, ...)")
-    return Dataset(root, names, tuple(levels))
+    members = _split_members(root / "dataset.json", split) if split is not None else None
+    return Dataset(root, names, tuple(levels), split, members)
+
+
+def _split_members(manifest: Path, split: str) -> frozenset[str]:
+    """The scenes ``manifest`` puts in ``split``; raises for a missing manifest or split."""
+    try:
+        data = json.loads(manifest.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise located(manifest, "missing; --split needs the dataset's manifest") from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise located(manifest, f"cannot read the manifest ({exc.__class__.__name__})") from None
+    allowed = split_order(data)
+    if split not in allowed:
+        raise located(manifest, f"--split {split!r}: the dataset's splits are {', '.join(allowed)}")
+    return frozenset(name for name, s in scene_splits(data).items() if s == split)
 
 
 def _image_size(path: Path) -> tuple[int, int]:
@@ -268,7 +292,21 @@ def scene_images(dataset: Dataset, level: str) -> dict[str, Path]:
         scenes[path.stem] = path
     if not scenes:
         raise located(folder, f"no images ({', '.join(IMAGE_SUFFIXES)})")
-    return scenes
+    if dataset.members is None:
+        return scenes
+    chosen = {name: path for name, path in scenes.items() if name in dataset.members}
+    if not chosen:
+        raise located(folder, f"no image of a scene of split {dataset.split!r}")
+    return chosen
+
+
+def outside_split(dataset: Dataset, level: str) -> frozenset[str]:
+    """Scenes of ``level`` that the dataset's split leaves out (their predictions are ignored)."""
+    if dataset.members is None:
+        return frozenset()
+    folder = dataset.image_dir(level)
+    stems = {p.stem for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES}
+    return frozenset(stems - dataset.members)
 
 
 def load_level_truth(dataset: Dataset, level: str) -> list[ImageTruth]:
@@ -281,7 +319,10 @@ def load_level_truth(dataset: Dataset, level: str) -> list[ImageTruth]:
     label_dir = dataset.label_dir(level)
     if not label_dir.is_dir():
         raise located(label_dir, f"missing; expected one '{LABEL_FORMAT}' file per image")
-    orphans = sorted(p.name for p in label_dir.glob("*.txt") if p.stem not in scenes)
+    skipped = outside_split(dataset, level)
+    orphans = sorted(
+        p.name for p in label_dir.glob("*.txt") if p.stem not in scenes and p.stem not in skipped
+    )
     if orphans:
         raise located(
             label_dir / orphans[0], f"label without an image in {dataset.image_dir(level)}"
@@ -321,15 +362,19 @@ def prediction_dir(pred_root: Path | str, level: str, *, allow_flat: bool) -> Pa
 
 
 def load_predictions(
-    folder: Path, scenes: Iterable[str], num_classes: int
+    folder: Path, scenes: Iterable[str], num_classes: int, ignored: Iterable[str] = ()
 ) -> Mapping[str, list[YoloBox]]:
     """Scene → predicted boxes from ``folder/<scene>.txt`` (``class cx cy w h conf``).
 
     A missing file is an image without detections. A ``.txt`` file whose scene is not in the
-    level is an error: a misnamed folder would otherwise score as "no detections".
+    level is an error: a misnamed folder would otherwise score as "no detections". Files of
+    ``ignored`` scenes (of the level, outside the split evaluated) are skipped.
     """
     wanted = set(scenes)
-    stray = sorted(p.name for p in folder.glob("*.txt") if p.stem not in wanted)
+    skip = set(ignored)
+    stray = sorted(
+        p.name for p in folder.glob("*.txt") if p.stem not in wanted and p.stem not in skip
+    )
     if stray:
         raise located(
             folder / stray[0],
@@ -342,3 +387,37 @@ def load_predictions(
         path = folder / f"{name}.txt"
         out[name] = read_yolo_file(path, num_classes, with_conf=True) if path.is_file() else []
     return out
+
+
+def dehazed_images(folder: Path | str, dataset: Dataset, level: str) -> dict[str, Path]:
+    """Scene → restored image in ``folder`` for every scene of ``level`` (of the dataset's
+    split): ``<scene>.png`` or ``<scene>_<level>.png`` (the hazy name of ``seahaze export
+    --layout paired``, which restoration code usually keeps), PNG or JPEG.
+
+    Raises :class:`MetricInputError` for a missing folder, a scene without a restored image or
+    with two, and an image that is no scene of the level.
+    """
+    root = Path(folder)
+    if not root.is_dir():
+        raise located(root, "folder of restored images not found")
+    scenes = set(scene_images(dataset, level))
+    skipped = outside_split(dataset, level)
+    found: dict[str, Path] = {}
+    for path in sorted(root.iterdir()):
+        if path.suffix.lower() not in IMAGE_SUFFIXES or not path.is_file():
+            continue
+        stem = path.stem.removesuffix(f"_{level}")
+        if stem in skipped:
+            continue
+        if stem not in scenes:
+            raise located(path, f"not an image of a scene of level {level} (name: <scene>.png)")
+        if stem in found:
+            raise located(path, f"scene {stem!r} has two restored images ({found[stem].name})")
+        found[stem] = path
+    missing = sorted(scenes - set(found))
+    if missing:
+        raise located(
+            root / f"{missing[0]}.png",
+            f"missing: {len(missing)} of {len(scenes)} scenes of {level} have no restored image",
+        )
+    return {scene: found[scene] for scene in sorted(found)}

@@ -1,0 +1,88 @@
+"""``seahaze export``: a finished dataset in the folder layout of a dehazing or detection tool."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .common import UsageError
+
+
+def _levels(text: str | None) -> list[str] | None:
+    """``--levels v0300,1000`` → level folder names (None: every hazy level)."""
+    if text is None:
+        return None
+    from ..metric.errors import MetricInputError
+    from ..metric.reader import parse_level
+
+    try:
+        return [parse_level(item) for item in text.split(",") if item.strip()]
+    except MetricInputError as err:
+        raise UsageError(str(err).replace("--level ", "--levels ")) from None
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    """Export a finished dataset into another tool's layout; links where possible."""
+    from ..export import ExportError, export_dataset
+
+    try:
+        report = export_dataset(
+            Path(args.dataset), Path(args.out), args.layout, args.link, _levels(args.levels)
+        )
+    except ExportError as err:
+        raise UsageError(str(err)) from None
+    except OSError as err:
+        where = f" ({err.filename})" if err.filename else ""
+        hint = "; try --link auto or copy" if args.link in ("hard", "symlink") else ""
+        print(
+            f"seahaze: error: cannot write the export: {err.strerror}{where}{hint}", file=sys.stderr
+        )
+        return 3
+    pairs = f", {report.pairs} hazy/clean pairs" if report.pairs else ""
+    removed = f"; removed {report.removed} file(s) of an earlier export" if report.removed else ""
+    print(
+        f"exported {report.layout}: splits {', '.join(report.splits)}, levels "
+        f"{', '.join(report.levels)}{pairs} to {report.out}: {report.placed} dataset files "
+        f"({report.methods}), {report.texts} text file(s){removed}"
+    )
+    return 0
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """The ``export`` subcommand and its flags."""
+    from ..export import LAYOUTS, LINK_MODES
+
+    parser = sub.add_parser(
+        "export",
+        help="a finished dataset in a dehazing or detection tool's folder layout (links)",
+        description="Write a view of a finished dataset in another tool's folder layout: "
+        "paired hazy/clean images per split for dehazing code, or one Ultralytics dataset per "
+        "level. Dataset files are hard-linked (symbolic links or copies where that is "
+        "impossible); files in --out that seahaze did not write are never overwritten. "
+        "See docs/dataset-format.md#exports. Exit code 2: bad input or refused; 3: write error.",
+    )
+    parser.add_argument("dataset", metavar="DIR", help="a finished dataset of 'seahaze render'")
+    parser.add_argument(
+        "--layout",
+        required=True,
+        choices=list(LAYOUTS),
+        help="paired: <split>/hazy/<scene>_<level>.png + <split>/GT/<scene>.png + pairs.csv; "
+        "same-name: GT/<scene>_<level>.png beside the hazy image of that name (DehazeFormer); "
+        "reside: <split>/hazy/<id>_<level>.png + <split>/clear/<id>.png (RESIDE, FFA-Net); "
+        "yolo: <level>/data.yaml with images/<split>/ and labels/<split>/ (Ultralytics)",
+    )
+    parser.add_argument("--out", required=True, metavar="DIR", help="folder of the export")
+    parser.add_argument(
+        "--link",
+        choices=list(LINK_MODES),
+        default="auto",
+        help="how dataset files are placed: auto (hard link, else symbolic link, else copy; "
+        "the summary says which), hard, symlink or copy (default: auto)",
+    )
+    parser.add_argument(
+        "--levels",
+        metavar="L1,L2",
+        help="hazy levels to export, e.g. v0300,v1000 or 300,1000 (default: every level)",
+    )
+    parser.set_defaults(func=cmd_export)
