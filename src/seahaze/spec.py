@@ -11,7 +11,15 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Annotated, Any, Literal, get_args
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    SerializerFunctionWrapHandler,
+    field_validator,
+    model_serializer,
+    model_validator,
+)
 from pydantic.fields import FieldInfo
 
 from .visibility import (
@@ -344,6 +352,23 @@ class PlacedVessel(_Spec):
         json_schema_extra=_unit("kn"),
     )
 
+    turn_rate_deg_s: float | None = Field(
+        None,
+        ge=-10.0,
+        le=10.0,
+        description="Rate of turn in a `sequence`, counter-clockwise positive (a ship turns at "
+        "most a few degrees per second). Default: a straight course.",
+        json_schema_extra=_unit("deg/s"),
+    )
+
+    @model_serializer(mode="wrap")
+    def _omit_unset_turn(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # A still scene's recorded config stays as it was before sequences existed.
+        data = handler(self)
+        if self.turn_rate_deg_s is None:
+            data.pop("turn_rate_deg_s", None)
+        return data
+
     @model_validator(mode="after")
     def _one_length(self) -> PlacedVessel:
         if self.mesh is not None and self.length_m is not None:
@@ -629,6 +654,51 @@ class VariationSpec(_Spec):
         return self
 
 
+SHORE_MAST_M = (5.0, 60.0)
+"""Heights of a shore platform's fixed mast (m): a harbour pole to a coastal VTS tower."""
+ENCOUNTERS = ("none", "crossing", "head_on", "overtaking", "random")
+"""Encounter geometries a sequence can set up between its first two vessels under way."""
+
+
+class SequenceSpec(_Spec):
+    """A scene rendered as a sequence of frames: vessels move, the sea evolves.
+
+    Frame ``i`` shows time ``sea.time_s + i / fps``; every vessel's pose in the YAML (or drawn
+    by the sampler) is its pose at mid-sequence, so the vessels stay near where the scene puts
+    them. See docs/dataset-format.md ("Sequences").
+    """
+
+    frames: int = Field(
+        100, ge=1, le=100000, description="Number of frames (`--frames` overrides)."
+    )
+    fps: float = Field(
+        10.0,
+        gt=0.0,
+        le=120.0,
+        description="Frame rate (`--fps` overrides).",
+        json_schema_extra=_unit("1/s"),
+    )
+    platform: Literal["shore"] = Field(
+        "shore",
+        description="Camera platform: `shore`, a fixed mast of 5..60 m (`camera.height_m`).",
+    )
+    encounter: Literal["none", "crossing", "head_on", "overtaking", "random"] = Field(
+        "none",
+        description="Encounter set up between the first two vessels under way: the second is "
+        "moved to pass the first at mid-sequence, crossing (60..120 deg apart), head-on or "
+        "overtaking; `random` draws one of the three from the seed.",
+    )
+
+    @property
+    def duration_s(self) -> float:
+        """Time from the first frame to the last (s)."""
+        return (self.frames - 1) / self.fps
+
+    def time_s(self, frame: int) -> float:
+        """Time of ``frame`` after the first frame (s)."""
+        return frame / self.fps
+
+
 class SceneSpec(_Spec):
     """A whole scene: camera, sun, sky, sea, vessels, haze and render settings."""
 
@@ -649,6 +719,27 @@ class SceneSpec(_Spec):
         default_factory=VariationSpec,
         description="Ranges the scenes of a batch (`--scenes N`) are drawn from.",
     )
+    sequence: SequenceSpec | None = Field(
+        None, description="Render the scene as a sequence of frames; default one still frame."
+    )
+
+    @model_serializer(mode="wrap")
+    def _omit_still(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # A still scene's recorded config stays byte-identical to before sequences existed.
+        data = handler(self)
+        if self.sequence is None:
+            data.pop("sequence", None)
+        return data
+
+    @model_validator(mode="after")
+    def _shore_mast(self) -> SceneSpec:
+        low, high = SHORE_MAST_M
+        if self.sequence is not None and not low <= self.camera.height_m <= high:
+            raise ValueError(
+                f"camera.height_m {self.camera.height_m:g} m does not fit a shore platform's "
+                f"mast; allowed: {low:g}..{high:g} m"
+            )
+        return self
 
 
 class OverrideError(ValueError):
@@ -696,10 +787,19 @@ def with_overrides(
     mode: str | None = None,
     variant: str | None = None,
     levels: list[float] | None = None,
+    frames: int | None = None,
+    fps: float | None = None,
 ) -> SceneSpec:
-    """A copy of ``spec`` with the command line's overrides (None: keep the scene's value)."""
+    """A copy of ``spec`` with the command line's overrides (None: keep the scene's value);
+    ``frames`` or ``fps`` make a still scene a sequence."""
     render = {"spp": spp, "seed": seed, "mode": mode, "variant": variant}
     changes: dict[str, Any] = {"render": {k: v for k, v in render.items() if v is not None}}
+    sequence = {"frames": frames, "fps": fps}
+    if any(v is not None for v in sequence.values()):
+        changes["sequence"] = {
+            **(spec.sequence.model_dump(mode="json") if spec.sequence else {}),
+            **{k: v for k, v in sequence.items() if v is not None},
+        }
     if resolution is not None:
         changes["camera"] = {"resolution": list(resolution)}
     if levels is not None:

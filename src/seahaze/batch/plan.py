@@ -35,20 +35,56 @@ class SceneJob:
     spec: SceneSpec
     template: str
     index: int | None = None
+    sequence: str | None = None
+    """Name of the sequence this job is a frame of (None: a still scene)."""
+    frame: int | None = None
+    """Frame of ``spec.sequence`` this job renders (0-based; None: a still scene)."""
 
     def images(self) -> int:
         """Images this scene writes: clean plus one per level."""
         return 1 + len(self.spec.haze.levels)
 
     def entry(self, status: str) -> dict[str, Any]:
-        """This scene's record in ``dataset.json``."""
-        return {
+        """This scene's record in ``dataset.json`` (a frame's also names its sequence)."""
+        entry: dict[str, Any] = {
             "status": status,
             "seed": self.spec.render.seed,
             "template": self.template,
             "index": self.index,
-            "config": self.spec.model_dump(mode="json", by_alias=True),
         }
+        if self.frame is not None:
+            entry |= {"sequence": self.sequence, "frame": self.frame}
+        return entry | {"config": self.spec.model_dump(mode="json", by_alias=True)}
+
+
+def frame_name(sequence: str, frame: int, frames: int) -> str:
+    """File name stem of ``frame`` of a sequence of ``frames``: ``<sequence>_f0007`` (4 digits
+    or more, so names sort in frame order)."""
+    width = max(4, len(str(frames - 1)))
+    return f"{sequence}_f{frame:0{width}d}"
+
+
+def expand_frames(jobs: Sequence[SceneJob]) -> list[SceneJob]:
+    """Each job of a sequence scene replaced by one job per frame (a frame is the unit of
+    work, resumed like a still scene); still scenes as they are."""
+    out: list[SceneJob] = []
+    for job in jobs:
+        sequence = job.spec.sequence
+        if sequence is None:
+            out.append(job)
+            continue
+        out += [
+            SceneJob(
+                frame_name(job.name, i, sequence.frames),
+                job.spec,
+                job.template,
+                job.index,
+                job.name,
+                i,
+            )
+            for i in range(sequence.frames)
+        ]
+    return out
 
 
 @dataclass(frozen=True)
@@ -143,6 +179,7 @@ def plan_scenes(
             for i in range(count):
                 seed = scene_seed(master, name, i)
                 jobs.append(SceneJob(f"{name}_{i:0{width}d}", vary_scene(spec, seed), name, i))
+    jobs = expand_frames(jobs)
     counts = Counter(job.name for job in jobs)
     duplicates = sorted(name for name, n in counts.items() if n > 1)
     if duplicates:
