@@ -39,6 +39,7 @@ from typing import Any, Literal
 
 from .. import __version__
 from ..dataset import Layout, data_yaml_text, level_entries, manifest
+from ..dataset.tracks import write_tracks
 from ..fileio import write_json, write_text
 from ..metric.errors import MetricInputError
 from ..metric.ground_truth import write_coco
@@ -219,9 +220,13 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
     write_text(ledger.layout.data_yaml, data_yaml_text(root, level_names, CLASS_NAMES))
     ledger.write_manifest()
     if pending:
-        # COCO files describe every scene of a level: stale until the last scene is done.
+        # COCO and track files describe every scene of a level: stale until the last is done.
+        sequences = {job.sequence for job in plan.jobs if job.sequence is not None}
         for level in [CLEAN_LEVEL, *level_names]:
             ledger.layout.coco(level).unlink(missing_ok=True)
+            for seq in sorted(sequences):
+                ledger.layout.mot_gt(level, seq).unlink(missing_ok=True)
+                ledger.layout.mot_seqinfo(level, seq).unlink(missing_ok=True)
     return ledger
 
 
@@ -378,6 +383,7 @@ def finish(
         ledger.write_manifest()
         if all(s == "done" for s in ledger.status.values()):
             write_coco(ledger.layout.root)
+            write_tracks(ledger.layout.root)
     except OSError as err:
         if stop is None or stop[0] != "write_error":
             stop = ("write_error", f"cannot write the manifest or COCO files: {err}")
