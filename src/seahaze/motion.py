@@ -10,7 +10,8 @@ An ``encounter`` moves the second vessel under way so that it passes the first a
 reference time at a drawn closest point of approach (CPA) no less than half the sum of the two
 footprint diagonals plus 15..60 m: two straight courses at that CPA never meet. Then every
 frame is checked: a sampled vessel whose course meets an earlier one's, or passes over the
-camera, gives way (a new heading drawn from :data:`seahaze.seeds.Stream.MOTION`); explicit
+camera, gives way (a new heading drawn from :data:`seahaze.seeds.Stream.MOTION`, then also a
+new distance on its bearing); explicit
 vessels whose courses meet are an error naming both and the time.
 
 Frame ``i`` is at ``i / fps`` seconds after the first frame; the sea is at ``sea.time_s`` plus
@@ -38,7 +39,9 @@ COURSE_JITTER_DEG = 10.0
 OVERTAKEN_SPEED_FRACTION = 0.6
 """An overtaken vessel sails at most this fraction of its overtaker's speed."""
 GIVE_WAY_TRIES = 24
-"""Headings a sampled vessel tries before its course is declared impossible."""
+"""Courses a sampled vessel tries before its course is declared impossible."""
+GIVE_WAY_SCALE = (0.7, 1.4)
+"""Range of the factor on its distance a sampled vessel may move by to give way."""
 
 
 class MotionError(ValueError):
@@ -223,10 +226,14 @@ def plan_courses(
     for i in range(len(courses)):
         conflict = first_conflict(courses, times, only=i)
         tries = 0
+        original = courses[i].placement
         while conflict is not None and i >= n_placed and tries < GIVE_WAY_TRIES:
             heading = float(rng.uniform(0.0, 360.0))
-            p = courses[i].placement
-            courses[i] = replace(courses[i], placement=_moved(p, p.x, p.y, heading))
+            # First a new heading only; then also a new distance on the same bearing (it may
+            # sit where an encounter put another vessel, which no heading clears).
+            scale = 1.0 if tries < GIVE_WAY_TRIES // 2 else float(rng.uniform(*GIVE_WAY_SCALE))
+            x, y = original.x * scale, original.y * scale
+            courses[i] = replace(courses[i], placement=_moved(original, x, y, heading))
             conflict = first_conflict(courses, times, only=i)
             tries += 1
         if conflict is not None:
