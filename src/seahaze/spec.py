@@ -656,8 +656,6 @@ class VariationSpec(_Spec):
 
 SHORE_MAST_M = (5.0, 60.0)
 """Heights of a shore platform's fixed mast (m): a harbour pole to a coastal VTS tower."""
-ENCOUNTERS = ("none", "crossing", "head_on", "overtaking", "random")
-"""Encounter geometries a sequence can set up between its first two vessels under way."""
 
 
 class SequenceSpec(_Spec):
@@ -669,7 +667,11 @@ class SequenceSpec(_Spec):
     """
 
     frames: int = Field(
-        100, ge=1, le=100000, description="Number of frames (`--frames` overrides)."
+        100,
+        ge=1,
+        le=10000,
+        description="Number of frames (`--frames` overrides); each frame is a scene of the "
+        "batch, which holds at most 10,000.",
     )
     fps: float = Field(
         10.0,
@@ -684,9 +686,10 @@ class SequenceSpec(_Spec):
     )
     encounter: Literal["none", "crossing", "head_on", "overtaking", "random"] = Field(
         "none",
-        description="Encounter set up between the first two vessels under way: the second is "
-        "moved to pass the first at mid-sequence, crossing (60..120 deg apart), head-on or "
-        "overtaking; `random` draws one of the three from the seed.",
+        description="Encounter set up between the first two vessels that can move (a stopped "
+        "one gets a speed drawn in its class's range): the second is moved to pass the first "
+        "at mid-sequence, crossing (60..120 deg apart), head-on or overtaking; `random` draws "
+        "one of the three from the seed.",
     )
 
     @property
