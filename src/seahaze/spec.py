@@ -688,8 +688,9 @@ class SequenceSpec(_Spec):
         "none",
         description="Encounter set up between the first two vessels that can move (a stopped "
         "one gets a speed drawn in its class's range): the second is moved to pass the first "
-        "at mid-sequence, crossing (60..120 deg apart), head-on or overtaking; `random` draws "
-        "one of the three from the seed.",
+        "at mid-sequence, crossing (60..120 deg apart), head-on or overtaking (which sets the "
+        "speeds: the faster class at its top speed, the other at 0.6 of that or its class's "
+        "lowest); `random` draws one of the three from the seed.",
     )
 
     @property

@@ -87,6 +87,8 @@ def _check_layouts(plan: Any) -> None:
 
     problems = []
     for job in plan.jobs:
+        if job.frame:  # a sequence's frames share its spec: its first frame checks them all
+            continue
         problems += [
             f"scene {job.name}: {'.'.join(str(p) for p in loc)}: {message}"
             for loc, message in layout_problems(job.spec)[:1]
