@@ -28,6 +28,7 @@ from PIL import Image
 
 from seahaze import ocean, vessels
 from seahaze.batch import plan_scenes
+from seahaze.batch.plan import vary_scene
 from seahaze.camera import Camera
 from seahaze.cli import main
 from seahaze.motion import MotionError, first_conflict, frame_times, plan_courses
@@ -80,6 +81,34 @@ def test_a_still_scene_records_no_sequence_field():
     placed = _spec().vessels.placed[0].model_dump(by_alias=True)
     assert "turn_rate_deg_s" not in placed  # unset: a still scene's config is unchanged
     assert _spec().vessels.placed[1].turn_rate_deg_s == 2.0
+
+
+def test_camera_perspective_varies_within_its_ranges_and_shifts_nothing_else():
+    base = {"variation": {"sun_elevation_deg": [10, 50], "wind_speed": [3, 12]}}
+    varied = {
+        "variation": {
+            **base["variation"],
+            "camera_height_m": [8, 40],
+            "camera_pitch_deg": [-6, 1],
+            "camera_fov_deg": [35, 75],
+        }
+    }
+    assert "camera_height_m" not in SceneSpec.model_validate(base).model_dump()["variation"]
+    heights = []
+    for seed in range(20):
+        a = vary_scene(SceneSpec.model_validate(base), seed)
+        b = vary_scene(SceneSpec.model_validate(varied), seed)
+        assert 8 <= b.camera.height_m <= 40 and -6 <= b.camera.pitch_deg <= 1
+        assert 35 <= b.camera.fov_deg <= 75
+        # Each varied quantity has its own stream: adding the camera's leaves the sun and wind.
+        assert (a.sun.elevation_deg, a.sea.wind_speed) == (b.sun.elevation_deg, b.sea.wind_speed)
+        heights.append(b.camera.height_m)
+    assert np.ptp(heights) > 10.0
+
+
+def test_a_sequence_varies_its_mast_only_within_5_to_60_m():
+    with pytest.raises(SceneFileError, match=r"variation.camera_height_m \[2, 40\].*5\.\.60 m"):
+        parse_scene_text("sequence: {frames: 3}\nvariation: {camera_height_m: [2, 40]}", "s.yaml")
 
 
 def test_frames_and_fps_overrides_make_a_sequence():

@@ -595,6 +595,12 @@ class RenderSpec(_Spec):
 _AngleEnd = Annotated[float, Field(ge=-360.0, le=360.0)]
 _ElevationEnd = Annotated[float, Field(ge=0.5, le=89.5)]
 _WindEnd = Annotated[float, Field(ge=0.0, le=40.0)]
+_HeightEnd = Annotated[float, Field(ge=0.5, le=1000.0)]
+_PitchEnd = Annotated[float, Field(ge=-60.0, le=30.0)]
+_FovEnd = Annotated[float, Field(gt=1.0, le=120.0)]
+CAMERA_VARIATION = ("camera_height_m", "camera_pitch_deg", "camera_fov_deg")
+"""Variation ranges of the camera's perspective (issue 17), left out of a recorded config
+when unset so configs recorded before them stay byte-identical."""
 
 
 class VariationSpec(_Spec):
@@ -632,6 +638,22 @@ class VariationSpec(_Spec):
         description="Range `[low, high]` of `sea.direction_deg` (each end within -360..360).",
         json_schema_extra=_unit("deg"),
     )
+    camera_height_m: tuple[_HeightEnd, _HeightEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `camera.height_m` (each end within 0.5..1000; "
+        "5..60 for a sequence's shore mast).",
+        json_schema_extra=_unit("m"),
+    )
+    camera_pitch_deg: tuple[_PitchEnd, _PitchEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `camera.pitch_deg` (each end within -60..30).",
+        json_schema_extra=_unit("deg"),
+    )
+    camera_fov_deg: tuple[_FovEnd, _FovEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `camera.fov_deg` (each end within 1..120, 1 excluded).",
+        json_schema_extra=_unit("deg"),
+    )
     resample_sea: bool = Field(
         True,
         description="Give every scene new wave phases (a `sea.seed` is replaced by one derived "
@@ -642,6 +664,14 @@ class VariationSpec(_Spec):
         description="Give every scene a new `vessels.sample` layout (its `seed` is replaced by "
         "one derived from the scene's seed); `vessels.placed` stay where they are.",
     )
+
+    @model_serializer(mode="wrap")
+    def _omit_unset_camera(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        data = handler(self)
+        for key in CAMERA_VARIATION:
+            if getattr(self, key) is None:
+                data.pop(key, None)
+        return data
 
     @model_validator(mode="after")
     def _ordered_ranges(self) -> VariationSpec:
@@ -742,6 +772,12 @@ class SceneSpec(_Spec):
             raise ValueError(
                 f"camera.height_m {self.camera.height_m:g} m does not fit a shore platform's "
                 f"mast; allowed: {low:g}..{high:g} m"
+            )
+        varied = self.variation.camera_height_m
+        if self.sequence is not None and varied and not low <= varied[0] <= varied[1] <= high:
+            raise ValueError(
+                f"variation.camera_height_m [{varied[0]:g}, {varied[1]:g}] does not fit a shore "
+                f"platform's mast; allowed: within {low:g}..{high:g} m"
             )
         return self
 

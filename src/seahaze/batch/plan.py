@@ -23,6 +23,9 @@ VARIED: dict[str, tuple[str, str]] = {
     "sun_azimuth_deg": ("sun", "azimuth_deg"),
     "wind_speed": ("sea", "wind_speed"),
     "sea_direction_deg": ("sea", "direction_deg"),
+    "camera_height_m": ("camera", "height_m"),
+    "camera_pitch_deg": ("camera", "pitch_deg"),
+    "camera_fov_deg": ("camera", "fov_deg"),
 }
 """Each ``variation`` range and the spec field it sets; the order fixes each one's stream."""
 
