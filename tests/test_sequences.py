@@ -163,6 +163,11 @@ def test_each_frame_is_a_unit_of_work():
     assert [job.frame for job in plan.jobs] == [0, 1, 2]
     entry = plan.jobs[1].entry("pending")
     assert (entry["sequence"], entry["frame"]) == ("tinyseq", 1)
+    batch = plan_scenes([(spec, "tinyseq")], count=2)
+    assert [job.name for job in batch.jobs][2:4] == ["tinyseq_00000_f0002", "tinyseq_00001_f0000"]
+    assert {job.sequence for job in batch.jobs} == {"tinyseq_00000", "tinyseq_00001"}
+    # One seed per sequence: its frames share it (the same sea and vessels, moving).
+    assert len({job.spec.render.seed for job in batch.jobs[:3]}) == 1
     still = plan_scenes([(SceneSpec(), "still")]).jobs[0].entry("pending")
     assert list(still) == ["status", "seed", "template", "index", "config"]
 
