@@ -32,7 +32,7 @@ from seahaze.batch.plan import vary_scene
 from seahaze.camera import Camera
 from seahaze.cli import main
 from seahaze.motion import MotionError, first_conflict, frame_times, plan_courses
-from seahaze.sceneio import SceneFileError, parse_scene_text
+from seahaze.sceneio import SceneFileError, load_scene, parse_scene_text
 from seahaze.spec import SceneSpec, with_overrides
 from seahaze.world import build_vessels, frame_layout, layout_vessels, ocean_params, vessel_speeds
 
@@ -109,6 +109,23 @@ def test_camera_perspective_varies_within_its_ranges_and_shifts_nothing_else():
 def test_a_sequence_varies_its_mast_only_within_5_to_60_m():
     with pytest.raises(SceneFileError, match=r"variation.camera_height_m \[2, 40\].*5\.\.60 m"):
         parse_scene_text("sequence: {frames: 3}\nvariation: {camera_height_m: [2, 40]}", "s.yaml")
+
+
+def test_the_encounter_scene_is_a_10_s_sequence_at_10_fps_with_a_crossing(capsys):
+    spec, name = load_scene(REPO / "scenes" / "encounter.yaml")
+    assert (name, spec.sequence.frames, spec.sequence.fps) == ("encounter", 100, 10.0)
+    assert spec.sequence.duration_s == pytest.approx(9.9)  # frame 99 at 9.9 s: 10 s of video
+    camera = Camera.from_spec(spec.camera)
+    first, speeds = frame_layout(spec, camera, 0)
+    last, _ = frame_layout(spec, camera, 99)
+    assert all(v > 0 for v in speeds)  # every vessel under way
+    # The fishing boat was moved to cross the ferry's course 60..120 deg apart.
+    turn = abs((first[1].heading_deg - first[0].heading_deg + 180) % 360 - 180)
+    assert 60 <= turn <= 120
+    assert math.dist((first[0].x, first[0].y), (last[0].x, last[0].y)) == pytest.approx(
+        15 * vessels.KNOT_M_S * 9.9
+    )
+    assert main(["validate", str(REPO / "scenes" / "encounter.yaml")]) == 0
 
 
 def test_frames_and_fps_overrides_make_a_sequence():
@@ -431,8 +448,16 @@ def test_mot_and_coco_track_files_match_the_frames(reference):
         if v["box_px"] is not None
     ]
     assert len(gt) == len(expected)
+    contrasts = {
+        (m["sequence"]["frame"] + 1, v["track_id"]): v["levels"]["v1000"]["apparent_contrast"]
+        for m in metas
+        for v in m["vessels"]
+    }
     for line, (frame, track, box) in zip(gt, expected, strict=True):
         fields = line.split(",")
+        # consider = an observer could see it: |apparent contrast| >= 0.02 (Koschmieder).
+        contrast = contrasts[(frame, track)]
+        assert int(fields[6]) == int(contrast is not None and abs(contrast) >= 0.02)
         assert (int(fields[0]), int(fields[1])) == (frame, track)
         assert float(fields[2]) == pytest.approx(box[0] + 1) and float(fields[4]) == pytest.approx(
             box[2] - box[0]
