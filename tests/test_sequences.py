@@ -34,7 +34,14 @@ from seahaze.cli import main
 from seahaze.motion import MotionError, first_conflict, frame_times, plan_courses
 from seahaze.sceneio import SceneFileError, load_scene, parse_scene_text
 from seahaze.spec import SceneSpec, with_overrides
-from seahaze.world import build_vessels, frame_layout, layout_vessels, ocean_params, vessel_speeds
+from seahaze.world import (
+    build_vessels,
+    frame_camera,
+    frame_layout,
+    layout_vessels,
+    ocean_params,
+    vessel_speeds,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -367,6 +374,56 @@ def test_the_sea_advances_by_its_dispersion_relation():
 
 
 # --------------------------------------------------------------------------------------------
+# A ship platform: the camera sails with the own ship and rides its heave and pitch
+
+SHIP = """\
+name: shipseq
+camera: {height_m: 15, pitch_deg: -2, fov_deg: 50, resolution: [64, 36]}
+sea: {quality: low, seed: 5, wind_speed: 10}
+vessels:
+  follow_slope: true
+  placed:
+    - {class: passenger_ferry, distance_m: 400, bearing_deg: 5, heading_deg: 150, length_m: 80,
+       speed_kn: 15}
+    - {class: tug, distance_m: 250, bearing_deg: -12, heading_deg: 40, length_m: 25, speed_kn: 8}
+haze: {levels: [1000]}
+sequence: {frames: 3, fps: 1, platform: ship, own_speed_kn: 12, own_length_m: 60}
+render: {spp: 1, seed: 3}
+"""
+
+
+def test_the_ship_camera_sails_heaves_and_pitches_with_the_sea():
+    spec = _spec(SHIP)
+    for frame in range(3):
+        camera = frame_camera(spec, frame)
+        t = frame - 1.0  # seconds from mid-sequence (t_ref = 1 s at 1 fps)
+        # Heading 0 (the camera's): the own ship sails along +x at 12 kn.
+        assert (camera.x_m, camera.y_m) == pytest.approx((12 * vessels.KNOT_M_S * t, 0.0))
+        params = ocean_params(spec)
+        surface = ocean.make_surface(replace(params, time_s=params.time_s + frame))
+        z = surface.height(np.array([camera.x_m, camera.x_m + 30, camera.x_m - 30]), np.zeros(3))
+        assert camera.height_m == pytest.approx(15.0 + z[0], abs=1e-9)
+        pitch = math.degrees(math.atan((z[1] - z[2]) / 60.0))
+        assert camera.pitch_deg == pytest.approx(-2.0 + pitch, abs=1e-9)
+    # The vessels' distances are measured from the moving camera.
+    camera = frame_camera(spec, 2)
+    placements, _ = frame_layout(spec, camera, 2)
+    for p in placements:
+        assert p.distance_m == pytest.approx(math.hypot(p.x - camera.x_m, p.y - camera.y_m))
+    assert frame_camera(spec, None) == Camera.from_spec(spec.camera)
+
+
+def test_a_vessel_may_not_sail_into_the_own_ship():
+    # A tug 120 m ahead steaming at the own ship: they meet within 10 s.
+    text = SHIP.replace("bearing_deg: -12, heading_deg: 40", "bearing_deg: 0, heading_deg: 180")
+    text = text.replace("distance_m: 250", "distance_m: 120").replace("frames: 3", "frames: 20")
+    with pytest.raises(SceneFileError, match=r"sequence: .*tug\) sails over the camera \(or into "):
+        parse_scene_text(text, "s.yaml")
+    with pytest.raises(SceneFileError, match="own_speed_kn and own_heading_deg describe an own"):
+        parse_scene_text("sequence: {own_speed_kn: 5}", "s.yaml")
+
+
+# --------------------------------------------------------------------------------------------
 # One rendered sequence, checked independently
 
 
@@ -388,6 +445,13 @@ def _meta(root: Path, frame: int) -> dict:
     return json.loads((root / "meta" / f"tinyseq_f{frame:04d}.json").read_text())
 
 
+def _frame_camera(meta: dict, spec: SceneSpec) -> Camera:
+    """The frame's camera from its meta alone (a ship platform's moves and pitches)."""
+    x, y, z = meta["camera"]["position_m"]
+    pitch = meta["camera"]["pitch_used_deg"]
+    return replace(Camera.from_spec(spec.camera), x_m=x, y_m=y, height_m=z, pitch_deg=pitch)
+
+
 def _reprojected_box(vessel: dict, camera: Camera) -> tuple[float, float, float, float]:
     """The image box of the vessel's vessel-frame bounds placed at its recorded pose."""
     pose = vessel["pose"]
@@ -405,8 +469,45 @@ def _reprojected_box(vessel: dict, camera: Camera) -> tuple[float, float, float,
     return u.min(), v.min(), u.max(), v.max()
 
 
+def _check_tracks(root: Path, name: str, spec: SceneSpec, dt: float) -> None:
+    metas = [json.loads((root / "meta" / f"{name}_f{f:04d}.json").read_text()) for f in range(3)]
+    boxed = 0
+    for meta in metas:
+        camera = _frame_camera(meta, spec)
+        for vessel in meta["vessels"]:
+            if vessel["box_px"] is None:
+                continue
+            boxed += 1
+            x0, y0, x1, y1 = vessel["box_px"]
+            u0, v0, u1, v1 = _reprojected_box(vessel, camera)
+            assert u0 - 1 <= x0 and x1 <= u1 + 1 and v0 - 1 <= y0 and y1 <= v1 + 1
+    assert boxed >= 4
+    for before, after in itertools.pairwise(metas):
+        for a, b in zip(before["vessels"], after["vessels"], strict=True):
+            assert a["track_id"] == b["track_id"]
+            step = math.dist(a["pose"]["position_m"][:2], b["pose"]["position_m"][:2])
+            assert step == pytest.approx(a["speed_m_s"] * dt, rel=1e-3)
+
+
+def test_a_ship_platform_sequence_renders_with_tracks_from_the_moving_camera(tmp_path):
+    scene = tmp_path / "shipseq.yaml"
+    scene.write_text(SHIP)
+    out = tmp_path / "out"
+    assert main(["render", str(scene), "--out", str(out), "--quiet"]) == 0
+    spec = _spec(SHIP)
+    _check_tracks(out, "shipseq", spec, 1.0)
+    positions = [_meta_of(out, "shipseq", f)["camera"]["position_m"] for f in range(3)]
+    assert positions[2][0] - positions[0][0] == pytest.approx(2 * 12 * vessels.KNOT_M_S)
+    assert len((out / "mot" / "v1000" / "shipseq" / "gt" / "gt.txt").read_text().splitlines()) >= 4
+
+
+def _meta_of(root: Path, name: str, frame: int) -> dict:
+    return json.loads((root / "meta" / f"{name}_f{frame:04d}.json").read_text())
+
+
 def test_tracks_are_continuous_and_reproject_from_the_recorded_pose(reference):
     camera = Camera.from_spec(_spec().camera)
+    _check_tracks(reference, "tinyseq", _spec(), 0.5)
     metas = [_meta(reference, f) for f in range(3)]
     assert [m["sequence"]["frame"] for m in metas] == [0, 1, 2]
     assert [m["sequence"]["time_s"] for m in metas] == [0.0, 0.5, 1.0]

@@ -10,8 +10,9 @@ An ``encounter`` moves the second vessel under way so that it passes the first a
 reference time at a drawn closest point of approach (CPA) no less than half the sum of the two
 footprint diagonals plus 15..60 m: two straight courses at that CPA never meet. Then every
 frame is checked: a sampled vessel whose course meets an earlier one's, or passes over the
-camera, gives way (a new heading drawn from :data:`seahaze.seeds.Stream.MOTION`, then also a
-new distance on its bearing); explicit
+camera (or meets the own ship of a ``ship`` platform, which sails from the camera's place at
+mid-sequence), gives way (a new heading drawn from :data:`seahaze.seeds.Stream.MOTION`, then
+also a new distance on its bearing); explicit
 vessels whose courses meet are an error naming both and the time.
 
 Frame ``i`` is at ``i / fps`` seconds after the first frame; the sea is at ``sea.time_s`` plus
@@ -73,17 +74,21 @@ class Course:
         y = p.y - radius * (math.cos(h) - math.cos(h0))
         return x, y, math.degrees(h) % 360.0
 
-    def placement_at(self, t_s: float, camera_heading_deg: float) -> vessels.Placement:
+    def placement_at(
+        self, t_s: float, camera_heading_deg: float, camera_xy: tuple[float, float] = (0.0, 0.0)
+    ) -> vessels.Placement:
         """The vessel's :class:`~seahaze.vessels.Placement` at ``t_s`` (distance and bearing
-        from the camera recomputed; bearing relative to ``camera_heading_deg``)."""
+        from the camera at ``camera_xy`` (m) recomputed; bearing relative to
+        ``camera_heading_deg``)."""
         x, y, heading = self.pose(t_s)
-        bearing = (math.degrees(math.atan2(y, x)) - camera_heading_deg + 180.0) % 360.0 - 180.0
+        dx, dy = x - camera_xy[0], y - camera_xy[1]
+        bearing = (math.degrees(math.atan2(dy, dx)) - camera_heading_deg + 180.0) % 360.0 - 180.0
         return replace(
             self.placement,
             x=x,
             y=y,
             heading_deg=heading,
-            distance_m=math.hypot(x, y),
+            distance_m=math.hypot(dx, dy),
             bearing_deg=bearing,
         )
 
@@ -161,11 +166,38 @@ def _covers_camera(corners: np.ndarray) -> bool:
     return bool(np.all(cross >= 0) or np.all(cross <= 0))
 
 
+OWN_SHIP = "own_ship"
+"""The ``kind`` of the own ship's placement (a ``ship`` platform; not a vessel class)."""
+OWN_BEAM_FRACTION = 1.0 / 6.0
+"""The own ship's beam as a fraction of its length (a typical L/B of 6)."""
+
+
+def own_course(spec: SceneSpec) -> Course | None:
+    """The own ship's course (a ``ship`` platform): at the camera's place at mid-sequence,
+    sailing at ``own_speed_kn`` on ``own_heading_deg``; None on a shore mast."""
+    sequence = spec.sequence
+    if sequence is None or sequence.platform != "ship":
+        return None
+    heading = (
+        spec.camera.heading_deg if sequence.own_heading_deg is None else sequence.own_heading_deg
+    )
+    length = sequence.own_length_m
+    placement = vessels.Placement(
+        OWN_SHIP, 0.0, 0.0, heading % 360.0, length, 0.0, 0.0, OWN_BEAM_FRACTION * length
+    )
+    speed = sequence.own_speed_kn * vessels.KNOT_M_S
+    return Course(placement, speed, 0.0, 0.5 * sequence.duration_s)
+
+
 def first_conflict(
-    courses: Sequence[Course], times: np.ndarray, only: int | None = None
+    courses: Sequence[Course],
+    times: np.ndarray,
+    only: int | None = None,
+    own: Course | None = None,
 ) -> tuple[int, int | None, float] | None:
     """The first ``(i, j, t)`` where vessel ``i``'s footprint meets vessel ``j < i``'s (``j``
-    None: it covers the camera) at frame time ``t`` (s); None if the courses never meet.
+    None: it covers the camera, or meets the own ship ``own`` of a ``ship`` platform) at frame
+    time ``t`` (s); None if the courses never meet.
 
     ``only``: check only that vessel against those before it. Footprints are the layout's
     rectangles (length × the class's largest beam) without margin.
@@ -174,9 +206,12 @@ def first_conflict(
     targets = range(len(courses)) if only is None else [only]
     for t in times:
         poses = [c.pose(float(t)) for c in courses]
+        own_corners = _corners(own, float(t)) if own is not None else None
         for i in targets:
             corners_i = _corners(courses[i], float(t))
-            if _covers_camera(corners_i):
+            if own_corners is not None and vessels.footprints_overlap(corners_i, own_corners):
+                return i, None, float(t)
+            if own_corners is None and _covers_camera(corners_i):
                 return i, None, float(t)
             for j in range(i):
                 gap = math.hypot(poses[i][0] - poses[j][0], poses[i][1] - poses[j][1])
@@ -223,8 +258,9 @@ def plan_courses(
         a, b = movers[:2]
         courses[a], courses[b], _ = _encounter(sequence.encounter, courses[a], courses[b], rng)
     times = frame_times(sequence)
+    own = own_course(spec)
     for i in range(len(courses)):
-        conflict = first_conflict(courses, times, only=i)
+        conflict = first_conflict(courses, times, only=i, own=own)
         tries = 0
         original = courses[i].placement
         while conflict is not None and i >= n_placed and tries < GIVE_WAY_TRIES:
@@ -234,7 +270,7 @@ def plan_courses(
             scale = 1.0 if tries < GIVE_WAY_TRIES // 2 else float(rng.uniform(*GIVE_WAY_SCALE))
             x, y = original.x * scale, original.y * scale
             courses[i] = replace(courses[i], placement=_moved(original, x, y, heading))
-            conflict = first_conflict(courses, times, only=i)
+            conflict = first_conflict(courses, times, only=i, own=own)
             tries += 1
         if conflict is not None:
             raise MotionError(_describe_conflict(courses, conflict))
@@ -245,7 +281,10 @@ def _describe_conflict(courses: Sequence[Course], conflict: tuple[int, int | Non
     i, j, t = conflict
     first = f"vessel #{i} ({courses[i].placement.kind})"
     if j is None:
-        return f"{first} sails over the camera at t = {t:.1f} s; allowed: courses clear of it"
+        return (
+            f"{first} sails over the camera (or into the own ship) at t = {t:.1f} s; allowed: "
+            "courses clear of it"
+        )
     other = f"vessel #{j} ({courses[j].placement.kind})"
     return (
         f"{other} and {first} collide at t = {t:.1f} s; allowed: courses whose hulls never "

@@ -710,10 +710,47 @@ class SequenceSpec(_Spec):
         description="Frame rate (`--fps` overrides).",
         json_schema_extra=_unit("1/s"),
     )
-    platform: Literal["shore"] = Field(
+    platform: Literal["shore", "ship"] = Field(
         "shore",
-        description="Camera platform: `shore`, a fixed mast of 5..60 m (`camera.height_m`).",
+        description="Camera platform: `shore`, a fixed mast; `ship`, a mast on an own ship "
+        "sailing at `own_speed_kn` and heaving and pitching with the sea (the camera is "
+        "roll-stabilised: its image stays level). Either way `camera.height_m` (5..60 m) is "
+        "the camera's height above the (own ship's) waterline.",
     )
+    own_speed_kn: float = Field(
+        0.0,
+        ge=0.0,
+        le=40.0,
+        description="Own ship's speed through the water (`ship` only); at mid-sequence the own "
+        "ship is where the scene's camera is.",
+        json_schema_extra=_unit("kn"),
+    )
+    own_heading_deg: float | None = Field(
+        None,
+        ge=-360.0,
+        le=360.0,
+        description="Own ship's course, counter-clockwise from +x (`ship` only); default "
+        "`camera.heading_deg` (the camera looks ahead).",
+        json_schema_extra=_unit("deg"),
+    )
+    own_length_m: float = Field(
+        60.0,
+        ge=5.0,
+        le=400.0,
+        description="Own ship's length (`ship` only): its hull averages the waves it heaves "
+        "and pitches on (beam a sixth of it), and no vessel may come within its footprint.",
+        json_schema_extra=_unit("m"),
+    )
+
+    @model_validator(mode="after")
+    def _ship_settings(self) -> SequenceSpec:
+        if self.platform == "shore" and (self.own_speed_kn or self.own_heading_deg is not None):
+            raise ValueError(
+                "own_speed_kn and own_heading_deg describe an own ship; allowed: platform ship, "
+                "or leave them out for a shore mast"
+            )
+        return self
+
     encounter: Literal["none", "crossing", "head_on", "overtaking", "random"] = Field(
         "none",
         description="Encounter set up between the first two vessels that can move (a stopped "
@@ -770,14 +807,14 @@ class SceneSpec(_Spec):
         low, high = SHORE_MAST_M
         if self.sequence is not None and not low <= self.camera.height_m <= high:
             raise ValueError(
-                f"camera.height_m {self.camera.height_m:g} m does not fit a shore platform's "
-                f"mast; allowed: {low:g}..{high:g} m"
+                f"camera.height_m {self.camera.height_m:g} m does not fit a sequence's "
+                f"{self.sequence.platform} mast; allowed: {low:g}..{high:g} m"
             )
         varied = self.variation.camera_height_m
         if self.sequence is not None and varied and not low <= varied[0] <= varied[1] <= high:
             raise ValueError(
-                f"variation.camera_height_m [{varied[0]:g}, {varied[1]:g}] does not fit a shore "
-                f"platform's mast; allowed: within {low:g}..{high:g} m"
+                f"variation.camera_height_m [{varied[0]:g}, {varied[1]:g}] does not fit a "
+                f"sequence's mast; allowed: within {low:g}..{high:g} m"
             )
         return self
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -110,6 +110,8 @@ class SceneGeometry:
     sea_foam_coverage: float = 0.0
     """Mean foam fraction of the sea surface (0–1): the whitecap coverage ``W`` of the wind
     (0 without whitecaps). Its mean reflectance is :data:`ocean.FOAM_REFLECTANCE`."""
+    camera_xy: tuple[float, float] = (0.0, 0.0)
+    """Horizontal camera position (m) the distances are measured from (a ship platform's)."""
 
     def digest(self) -> str:
         """SHA-256 of every mesh and material: two worlds with the same digest render the same
@@ -197,7 +199,12 @@ def build_sea(
     foam = ocean.FoamField(surface, params.wind_speed) if spec.sea.whitecaps and not flat else None
     wakes = ocean.WakeField(moving) if moving else None
     mesh = ocean.build_sea_mesh_data(
-        surface, camera_height_m=camera.height_m, quality=spec.sea.quality, foam=foam, wakes=wakes
+        surface,
+        camera_xy=(camera.x_m, camera.y_m),
+        camera_height_m=camera.height_m,
+        quality=spec.sea.quality,
+        foam=foam,
+        wakes=wakes,
     )
     attributes: dict[str, np.ndarray] = {}
     if mesh.foam is not None and mesh.foam_reflectance is not None and mesh.foam.max() > 0.0:
@@ -350,7 +357,46 @@ def frame_layout(
         return placements, speeds
     t = spec.sequence.time_s(frame)
     courses = motion.plan_courses(spec, placements, speeds)
-    return [c.placement_at(t, camera.heading_deg) for c in courses], [c.speed_m_s for c in courses]
+    xy = (camera.x_m, camera.y_m)
+    return [c.placement_at(t, camera.heading_deg, xy) for c in courses], [
+        c.speed_m_s for c in courses
+    ]
+
+
+def frame_camera(spec: SceneSpec, frame: int | None = None) -> Camera:
+    """The camera at ``frame`` of the scene's sequence (None: the scene's camera).
+
+    On a ``ship`` platform the camera sails with the own ship (:func:`seahaze.motion.own_course`)
+    and rides its heave and pitch: the own ship floats on the surface at the frame's time, its
+    waterline at the surface height under midships, pitched and rolled to the slope over its
+    length and beam (a long hull averages short waves, as the vessels' do); the mast carries the
+    camera ``camera.height_m`` above the waterline, and the view's pitch gains the ship's
+    pitch and roll projected on the view direction. The camera is roll-stabilised: its image
+    stays level (the pinhole camera has no roll).
+    """
+    camera = Camera.from_spec(spec.camera)
+    own = motion.own_course(spec)
+    if frame is None or spec.sequence is None or own is None:
+        return camera
+    t = spec.sequence.time_s(frame)
+    x, y, heading = own.pose(t)
+    surface = ocean.make_surface(ocean_params(spec, t))
+    length = own.placement.length_m
+    beam = motion.OWN_BEAM_FRACTION * length
+    h = math.radians(heading)
+    fwd, port = np.array([math.cos(h), math.sin(h)]), np.array([-math.sin(h), math.cos(h)])
+    centre = np.array([x, y])
+    points = centre + np.array(
+        [0.5 * length * fwd, -0.5 * length * fwd, 0.5 * beam * port, -0.5 * beam * port, 0.0 * fwd]
+    )
+    z = np.asarray(surface.height(points[:, 0], points[:, 1]), np.float64)
+    pitch = math.atan((z[0] - z[1]) / length)
+    roll = math.atan((z[2] - z[3]) / beam)
+    look = math.radians(camera.heading_deg - heading)
+    view_pitch = camera.pitch_deg + math.degrees(pitch * math.cos(look) + roll * math.sin(look))
+    return replace(
+        camera, x_m=x, y_m=y, height_m=camera.height_m + float(z[4]), pitch_deg=view_pitch
+    )
 
 
 def build_vessels(
@@ -438,4 +484,5 @@ def build_geometry(spec: SceneSpec, camera: Camera, frame: int | None = None) ->
         instances,
         sea_roughness_near=sea.roughness_near,
         sea_foam_coverage=sea.foam_coverage,
+        camera_xy=(camera.x_m, camera.y_m),
     )

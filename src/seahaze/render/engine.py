@@ -21,7 +21,7 @@ from .. import annotate, imaging, labels
 from ..camera import Camera
 from ..spec import SceneSpec
 from ..visibility import CLEAN_LEVEL, channel_extinction, extinction_coefficient, level_name
-from ..world import SceneGeometry, build_geometry
+from ..world import SceneGeometry, build_geometry, frame_camera
 from . import passes
 from .levels import LevelRenderer
 from .passes import Airlight, GeometryPass
@@ -126,7 +126,7 @@ def open_session(
     """
     timings = {} if timings is None else timings
     variant = select_variant(spec.render.variant)
-    camera = Camera.from_spec(spec.camera)
+    camera = frame_camera(spec, frame)
     with _timed(timings, "geometry_build"):
         geometry = build_geometry(spec, camera, frame) if geometry is None else geometry
     with _timed(timings, "scene_load"):
@@ -181,12 +181,12 @@ def render_scene(
     ]
     scene = _assemble(session, name, clean, rendered, timings)
     if frame is not None and spec.sequence is not None:
-        scene.meta = sequence_meta(scene.meta, session.geometry, spec, frame)
+        scene.meta = sequence_meta(scene.meta, session.geometry, spec, frame, session.camera)
     return scene
 
 
 def sequence_meta(
-    meta: dict[str, Any], geometry: SceneGeometry, spec: SceneSpec, frame: int
+    meta: dict[str, Any], geometry: SceneGeometry, spec: SceneSpec, frame: int, camera: Camera
 ) -> dict[str, Any]:
     """A frame's ``meta`` with its place in the sequence and each vessel's track id and pose
     (position in m, heading, pitch and roll in deg, vessel-frame bounds in m): enough to
@@ -208,6 +208,9 @@ def sequence_meta(
         out_vessels.append({"track_id": v.track_id, **entry, "pose": pose})
     return {
         **meta,
+        # A ship platform's camera moves, heaves and pitches: position_m is the frame's, and
+        # the view's pitch is recorded beside the scene's.
+        "camera": {**meta["camera"], "pitch_used_deg": camera.pitch_deg},
         "sequence": {
             **sequence.model_dump(mode="json"),
             "frame": frame,
