@@ -135,6 +135,17 @@ def test_the_encounter_scene_is_a_10_s_sequence_at_10_fps_with_a_crossing(capsys
     assert main(["validate", str(REPO / "scenes" / "encounter.yaml")]) == 0
 
 
+def test_the_ship_encounter_scene_sails_and_meets_head_on():
+    spec, _ = load_scene(REPO / "scenes" / "ship_encounter.yaml")
+    assert (spec.sequence.platform, spec.sequence.frames, spec.sequence.fps) == ("ship", 100, 10.0)
+    start, end = frame_camera(spec, 0), frame_camera(spec, 99)
+    assert end.x_m - start.x_m == pytest.approx(12 * vessels.KNOT_M_S * 9.9)
+    placements, _ = frame_layout(spec, start, 0)
+    movers = [p for p in placements if vessels.get_class(p.kind).service_speed_kn[1] > 0]
+    turn = abs((movers[1].heading_deg - movers[0].heading_deg + 180) % 360 - 180)
+    assert abs(turn - 180) <= 10.0
+
+
 def test_frames_and_fps_overrides_make_a_sequence():
     spec = with_overrides(SceneSpec(), frames=12, fps=5)
     assert (spec.sequence.frames, spec.sequence.fps) == (12, 5.0)
