@@ -133,6 +133,9 @@ def test_the_encounter_scene_is_a_10_s_sequence_at_10_fps_with_a_crossing(capsys
         15 * vessels.KNOT_M_S * 9.9
     )
     assert main(["validate", str(REPO / "scenes" / "encounter.yaml")]) == 0
+    placements = layout_vessels(spec, camera)
+    courses = plan_courses(spec, placements, vessel_speeds(spec, placements))
+    assert [c.encounter for c in courses] == ["crossing", "crossing", None, None, None]
 
 
 def test_the_ship_encounter_scene_sails_and_meets_head_on():
@@ -525,6 +528,7 @@ def test_tracks_are_continuous_and_reproject_from_the_recorded_pose(reference):
     boxed = 0
     for meta in metas:
         assert [v["track_id"] for v in meta["vessels"]] == [1, 2]
+        assert [v["encounter"] for v in meta["vessels"]] == [None, None]
         for vessel in meta["vessels"]:
             if vessel["box_px"] is None:
                 continue

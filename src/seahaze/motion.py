@@ -59,6 +59,8 @@ class Course:
     turn_rate_deg_s: float = 0.0
     t_ref_s: float = 0.0
     """Reference time after the first frame (s): the middle of the sequence."""
+    encounter: str | None = None
+    """The encounter this vessel is in (``crossing``, ``head_on``, ``overtaking``), if any."""
 
     def pose(self, t_s: float) -> tuple[float, float, float]:
         """Midships ``(x, y)`` (m) and heading (deg) at time ``t_s`` after the first frame."""
@@ -152,7 +154,11 @@ def _encounter(
     near, far = centre - cpa * normal, centre + cpa * normal
     spot = far if np.hypot(*far) >= np.hypot(*near) else near
     moved_b = _moved(pb, float(spot[0]), float(spot[1]), heading_b)
-    return replace(a, speed_m_s=speed_a), replace(b, placement=moved_b, speed_m_s=speed_b), kind
+    return (
+        replace(a, speed_m_s=speed_a, encounter=kind),
+        replace(b, placement=moved_b, speed_m_s=speed_b, encounter=kind),
+        kind,
+    )
 
 
 def _corners(course: Course, t_s: float) -> np.ndarray:

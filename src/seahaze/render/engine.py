@@ -17,11 +17,11 @@ from typing import Any
 
 import numpy as np
 
-from .. import annotate, imaging, labels
+from .. import annotate, imaging, labels, motion
 from ..camera import Camera
 from ..spec import SceneSpec
 from ..visibility import CLEAN_LEVEL, channel_extinction, extinction_coefficient, level_name
-from ..world import SceneGeometry, build_geometry, frame_camera
+from ..world import SceneGeometry, build_geometry, frame_camera, layout_vessels, vessel_speeds
 from . import passes
 from .levels import LevelRenderer
 from .passes import Airlight, GeometryPass
@@ -194,6 +194,9 @@ def sequence_meta(
     sequence = spec.sequence
     assert sequence is not None
     by_index = {v.index: v for v in geometry.vessels}
+    # The courses again (a fraction of a second) for the encounter each vessel is in.
+    placements = layout_vessels(spec, Camera.from_spec(spec.camera))
+    courses = motion.plan_courses(spec, placements, vessel_speeds(spec, placements))
     out_vessels = []
     for entry in meta["vessels"]:
         v = by_index[entry["index"]]
@@ -205,7 +208,8 @@ def sequence_meta(
             "roll_deg": v.roll_deg,
             "bounds_m": [list(b) for b in v.bounds_m] if v.bounds_m is not None else None,
         }
-        out_vessels.append({"track_id": v.track_id, **entry, "pose": pose})
+        encounter = courses[v.index].encounter
+        out_vessels.append({"track_id": v.track_id, **entry, "pose": pose, "encounter": encounter})
     return {
         **meta,
         # A ship platform's camera moves, heaves and pitches: position_m is the frame's, and
