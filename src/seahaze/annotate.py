@@ -64,7 +64,9 @@ def vessel_meta(
     for v in geometry.vessels:
         p = v.placement
         box = by_vessel.get(v.index)
-        distance = float(np.hypot(p.x, p.y))
+        # From the camera: at the origin but on a moving (ship) platform, where x - 0.0 == x.
+        cx, cy = geometry.camera_xy
+        distance = float(np.hypot(p.x - cx, p.y - cy))
         out.append(
             {
                 "index": v.index,

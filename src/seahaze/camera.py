@@ -1,6 +1,7 @@
 """The pinhole camera model shared by the renderer, the label projection and the tests.
 
-World frame: Z up, metres, sea level at z = 0, camera at ``(0, 0, height)``. Heading is measured
+World frame: Z up, metres, sea level at z = 0, camera at ``(0, 0, height)`` (a ship platform's
+camera moves: ``(x_m, y_m, height)``). Heading is measured
 counter-clockwise from +x, pitch upward from the horizontal. Image coordinates ``(u, v)`` are in
 pixels with the origin at the top-left corner of the top-left pixel, ``u`` to the right and
 ``v`` down; pixel ``(i, j)`` covers ``[i, i+1) x [j, j+1)``.
@@ -26,6 +27,9 @@ class Camera:
     heading_deg: float
     width: int
     height: int
+    x_m: float = 0.0
+    """Horizontal position (m) of the camera: 0 but on a moving platform (a sequence's ship)."""
+    y_m: float = 0.0
 
     @classmethod
     def from_spec(cls, spec: CameraSpec) -> Camera:
@@ -36,7 +40,7 @@ class Camera:
     @property
     def origin(self) -> np.ndarray:
         """Camera position in world coordinates (m)."""
-        return np.array([0.0, 0.0, self.height_m])
+        return np.array([self.x_m, self.y_m, self.height_m])
 
     def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Unit vectors ``(forward, right, up)`` of the camera in world coordinates."""

@@ -121,3 +121,46 @@ def contact_sheet(
     for i, tile in enumerate(tiles):
         sheet.paste(tile, ((i % columns) * tile_width, (i // columns) * tiles[0].height))
     return sheet
+
+
+def sequence_frames(root: Path, sequence: str) -> tuple[list[str], float]:
+    """The frame scenes of ``sequence`` in frame order and its frame rate (frames/s)."""
+    scenes = _manifest(root)["scenes"]
+    frames = sorted(
+        (entry["frame"], name)
+        for name, entry in scenes.items()
+        if isinstance(entry, dict) and entry.get("sequence") == sequence
+    )
+    if not frames:
+        names = sorted({e.get("sequence") for e in scenes.values() if e.get("sequence")})
+        raise PreviewError(
+            f"sequence '{sequence}' not in {root}; available: {', '.join(names) or 'none'}"
+        )
+    fps = float(scenes[frames[0][1]]["config"]["sequence"]["fps"])
+    return [name for _, name in frames], fps
+
+
+def animation(
+    root: Path,
+    sequence: str,
+    levels: list[str] | None = None,
+    columns: int = 3,
+    tile_width: int = 320,
+    boxes: bool = True,
+) -> tuple[list[Image.Image], float]:
+    """One contact sheet per frame of ``sequence`` (its ``levels`` side by side, boxes drawn)
+    and the sequence's frame rate (frames/s)."""
+    names, fps = sequence_frames(root, sequence)
+    sheets = [contact_sheet(root, name, levels, columns, tile_width, boxes) for name in names]
+    return sheets, fps
+
+
+def save_gif(sheets: list[Image.Image], out: Path, fps: float) -> None:
+    """Write ``sheets`` as a looping animated GIF at ``fps`` (GIF delays are whole
+    hundredths of a second, so the rate is rounded to that)."""
+    delay_ms = max(20, round(1000.0 / fps / 10.0) * 10)
+    # One adaptive palette per frame: sky and sea gradients band least that way.
+    frames = [sheet.convert("P", palette=Image.Palette.ADAPTIVE, colors=255) for sheet in sheets]
+    frames[0].save(
+        out, save_all=True, append_images=frames[1:], duration=delay_ms, loop=0, disposal=1
+    )

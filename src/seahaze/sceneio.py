@@ -314,16 +314,20 @@ def _check_vessel_classes(spec: SceneSpec, file: str, lines: dict[Loc, int]) -> 
 
 def layout_problems(spec: SceneSpec) -> list[tuple[Loc, str]]:
     """Whether the vessel layout of ``spec`` (with its ``render.seed``) can be built: a vessel
-    over the camera, two on one spot or a sampler that cannot fit its vessels would otherwise
-    fail the render. Returns ``(location, message)`` pairs; the layout is cheap (no meshes
-    but the user meshes, which are small)."""
+    over the camera, two on one spot, a sampler that cannot fit its vessels or, in a sequence,
+    courses that meet at any frame would otherwise fail the render. Returns ``(location,
+    message)`` pairs; the layout is cheap (no meshes but the user meshes, which are small)."""
     from .camera import Camera
-    from .world import layout_vessels
+    from .motion import MotionError
+    from .world import frame_layout
 
     if not spec.vessels.placed and (spec.vessels.sample is None or not spec.vessels.sample.count):
         return []
     try:
-        layout_vessels(spec, Camera.from_spec(spec.camera))
+        # A sequence's courses are checked over every frame: no two hulls may ever meet.
+        frame_layout(spec, Camera.from_spec(spec.camera), 0 if spec.sequence else None)
+    except MotionError as exc:
+        return [(("sequence",), f"the vessels' courses cannot be sailed: {exc}")]
     except (ValueError, FileNotFoundError) as exc:  # LayoutError is a ValueError
         text = str(exc).strip().splitlines()
         message = text[0] if text else type(exc).__name__

@@ -29,6 +29,8 @@ class Stream(IntEnum):
     """Where the sampled vessels go (unless ``vessels.sample.seed`` is given)."""
     VESSELS = 3
     """Proportions, parts and paint of the procedural vessel models."""
+    MOTION = 4
+    """A sequence's encounter geometry and the courses of sampled vessels that must give way."""
     # Batches (seahaze.batch)
     BATCH = 11
     """Scene seeds of a batch, from (master seed, template name, scene index)."""

@@ -11,7 +11,15 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Annotated, Any, Literal, get_args
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    SerializerFunctionWrapHandler,
+    field_validator,
+    model_serializer,
+    model_validator,
+)
 from pydantic.fields import FieldInfo
 
 from .visibility import (
@@ -344,6 +352,23 @@ class PlacedVessel(_Spec):
         json_schema_extra=_unit("kn"),
     )
 
+    turn_rate_deg_s: float | None = Field(
+        None,
+        ge=-10.0,
+        le=10.0,
+        description="Rate of turn in a `sequence`, counter-clockwise positive (a ship turns at "
+        "most a few degrees per second). Default: a straight course.",
+        json_schema_extra=_unit("deg/s"),
+    )
+
+    @model_serializer(mode="wrap")
+    def _omit_unset_turn(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # A still scene's recorded config stays as it was before sequences existed.
+        data = handler(self)
+        if self.turn_rate_deg_s is None:
+            data.pop("turn_rate_deg_s", None)
+        return data
+
     @model_validator(mode="after")
     def _one_length(self) -> PlacedVessel:
         if self.mesh is not None and self.length_m is not None:
@@ -570,6 +595,12 @@ class RenderSpec(_Spec):
 _AngleEnd = Annotated[float, Field(ge=-360.0, le=360.0)]
 _ElevationEnd = Annotated[float, Field(ge=0.5, le=89.5)]
 _WindEnd = Annotated[float, Field(ge=0.0, le=40.0)]
+_HeightEnd = Annotated[float, Field(ge=0.5, le=1000.0)]
+_PitchEnd = Annotated[float, Field(ge=-60.0, le=30.0)]
+_FovEnd = Annotated[float, Field(gt=1.0, le=120.0)]
+CAMERA_VARIATION = ("camera_height_m", "camera_pitch_deg", "camera_fov_deg")
+"""Variation ranges of the camera's perspective (issue 17), left out of a recorded config
+when unset so configs recorded before them stay byte-identical."""
 
 
 class VariationSpec(_Spec):
@@ -607,6 +638,22 @@ class VariationSpec(_Spec):
         description="Range `[low, high]` of `sea.direction_deg` (each end within -360..360).",
         json_schema_extra=_unit("deg"),
     )
+    camera_height_m: tuple[_HeightEnd, _HeightEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `camera.height_m` (each end within 0.5..1000; "
+        "5..60 for a sequence's shore mast).",
+        json_schema_extra=_unit("m"),
+    )
+    camera_pitch_deg: tuple[_PitchEnd, _PitchEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `camera.pitch_deg` (each end within -60..30).",
+        json_schema_extra=_unit("deg"),
+    )
+    camera_fov_deg: tuple[_FovEnd, _FovEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `camera.fov_deg` (each end within 1..120, 1 excluded).",
+        json_schema_extra=_unit("deg"),
+    )
     resample_sea: bool = Field(
         True,
         description="Give every scene new wave phases (a `sea.seed` is replaced by one derived "
@@ -618,6 +665,14 @@ class VariationSpec(_Spec):
         "one derived from the scene's seed); `vessels.placed` stay where they are.",
     )
 
+    @model_serializer(mode="wrap")
+    def _omit_unset_camera(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        data = handler(self)
+        for key in CAMERA_VARIATION:
+            if getattr(self, key) is None:
+                data.pop(key, None)
+        return data
+
     @model_validator(mode="after")
     def _ordered_ranges(self) -> VariationSpec:
         for name in type(self).model_fields:
@@ -627,6 +682,92 @@ class VariationSpec(_Spec):
                     f"{name} must be [low, high] with low <= high, got [{value[0]:g}, {value[1]:g}]"
                 )
         return self
+
+
+SHORE_MAST_M = (5.0, 60.0)
+"""Heights of a shore platform's fixed mast (m): a harbour pole to a coastal VTS tower."""
+
+
+class SequenceSpec(_Spec):
+    """A scene rendered as a sequence of frames: vessels move, the sea evolves.
+
+    Frame ``i`` shows time ``sea.time_s + i / fps``; every vessel's pose in the YAML (or drawn
+    by the sampler) is its pose at mid-sequence, so the vessels stay near where the scene puts
+    them. See docs/dataset-format.md ("Sequences").
+    """
+
+    frames: int = Field(
+        100,
+        ge=1,
+        le=10000,
+        description="Number of frames (`--frames` overrides); each frame is a scene of the "
+        "batch, which holds at most 10,000.",
+    )
+    fps: float = Field(
+        10.0,
+        gt=0.0,
+        le=120.0,
+        description="Frame rate (`--fps` overrides).",
+        json_schema_extra=_unit("1/s"),
+    )
+    platform: Literal["shore", "ship"] = Field(
+        "shore",
+        description="Camera platform: `shore`, a fixed mast; `ship`, a mast on an own ship "
+        "sailing at `own_speed_kn` and heaving and pitching with the sea (the camera is "
+        "roll-stabilised: its image stays level). Either way `camera.height_m` (5..60 m) is "
+        "the camera's height above the (own ship's) waterline.",
+    )
+    own_speed_kn: float = Field(
+        0.0,
+        ge=0.0,
+        le=40.0,
+        description="Own ship's speed through the water (`ship` only); at mid-sequence the own "
+        "ship is where the scene's camera is.",
+        json_schema_extra=_unit("kn"),
+    )
+    own_heading_deg: float | None = Field(
+        None,
+        ge=-360.0,
+        le=360.0,
+        description="Own ship's course, counter-clockwise from +x (`ship` only); default "
+        "`camera.heading_deg` (the camera looks ahead).",
+        json_schema_extra=_unit("deg"),
+    )
+    own_length_m: float = Field(
+        60.0,
+        ge=5.0,
+        le=400.0,
+        description="Own ship's length (`ship` only): its hull averages the waves it heaves "
+        "and pitches on (beam a sixth of it), and no vessel may come within its footprint.",
+        json_schema_extra=_unit("m"),
+    )
+
+    @model_validator(mode="after")
+    def _ship_settings(self) -> SequenceSpec:
+        if self.platform == "shore" and (self.own_speed_kn or self.own_heading_deg is not None):
+            raise ValueError(
+                "own_speed_kn and own_heading_deg describe an own ship; allowed: platform ship, "
+                "or leave them out for a shore mast"
+            )
+        return self
+
+    encounter: Literal["none", "crossing", "head_on", "overtaking", "random"] = Field(
+        "none",
+        description="Encounter set up between the first two vessels that can move (a stopped "
+        "one gets a speed drawn in its class's range): the second is moved to pass the first "
+        "at mid-sequence, crossing (60..120 deg apart), head-on or overtaking (which sets the "
+        "speeds: the faster class at its top speed, the other at 0.6 of that or its class's "
+        "lowest); `random` draws one of the three from the seed.",
+    )
+
+    @property
+    def duration_s(self) -> float:
+        """Time from the first frame to the last (s)."""
+        return (self.frames - 1) / self.fps
+
+    def time_s(self, frame: int) -> float:
+        """Time of ``frame`` after the first frame (s)."""
+        return frame / self.fps
 
 
 class SceneSpec(_Spec):
@@ -649,6 +790,33 @@ class SceneSpec(_Spec):
         default_factory=VariationSpec,
         description="Ranges the scenes of a batch (`--scenes N`) are drawn from.",
     )
+    sequence: SequenceSpec | None = Field(
+        None, description="Render the scene as a sequence of frames; default one still frame."
+    )
+
+    @model_serializer(mode="wrap")
+    def _omit_still(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # A still scene's recorded config stays byte-identical to before sequences existed.
+        data = handler(self)
+        if self.sequence is None:
+            data.pop("sequence", None)
+        return data
+
+    @model_validator(mode="after")
+    def _shore_mast(self) -> SceneSpec:
+        low, high = SHORE_MAST_M
+        if self.sequence is not None and not low <= self.camera.height_m <= high:
+            raise ValueError(
+                f"camera.height_m {self.camera.height_m:g} m does not fit a sequence's "
+                f"{self.sequence.platform} mast; allowed: {low:g}..{high:g} m"
+            )
+        varied = self.variation.camera_height_m
+        if self.sequence is not None and varied and not low <= varied[0] <= varied[1] <= high:
+            raise ValueError(
+                f"variation.camera_height_m [{varied[0]:g}, {varied[1]:g}] does not fit a "
+                f"sequence's mast; allowed: within {low:g}..{high:g} m"
+            )
+        return self
 
 
 class OverrideError(ValueError):
@@ -696,10 +864,19 @@ def with_overrides(
     mode: str | None = None,
     variant: str | None = None,
     levels: list[float] | None = None,
+    frames: int | None = None,
+    fps: float | None = None,
 ) -> SceneSpec:
-    """A copy of ``spec`` with the command line's overrides (None: keep the scene's value)."""
+    """A copy of ``spec`` with the command line's overrides (None: keep the scene's value);
+    ``frames`` or ``fps`` make a still scene a sequence."""
     render = {"spp": spp, "seed": seed, "mode": mode, "variant": variant}
     changes: dict[str, Any] = {"render": {k: v for k, v in render.items() if v is not None}}
+    sequence = {"frames": frames, "fps": fps}
+    if any(v is not None for v in sequence.values()):
+        changes["sequence"] = {
+            **(spec.sequence.model_dump(mode="json") if spec.sequence else {}),
+            **{k: v for k, v in sequence.items() if v is not None},
+        }
     if resolution is not None:
         changes["camera"] = {"resolution": list(resolution)}
     if levels is not None:

@@ -18,12 +18,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
-from . import ocean, vessels
+from . import motion, ocean, vessels
 from .camera import Camera
 from .seeds import Stream, stream_rng, stream_seed
 from .spec import SceneSpec
@@ -75,6 +75,18 @@ class VesselInstance:
     """Speed through the water (m/s); a moving vessel makes waves and a foam wake."""
     hull_draft_m: float = 0.0
     """Draft of the displacing hull body (m), for the vessel's waves."""
+    pitch_deg: float = 0.0
+    """Bow-up pitch to the sea slope (deg; 0 unless ``vessels.follow_slope``)."""
+    roll_deg: float = 0.0
+    """Port-up roll to the sea slope (deg; 0 unless ``vessels.follow_slope``)."""
+    bounds_m: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None
+    """Vessel-frame box ``(min xyz, max xyz)`` (m) of the model: with the pose it re-projects
+    the vessel's image box."""
+
+    @property
+    def track_id(self) -> int:
+        """Persistent id of the vessel across a sequence's frames (1-based, as MOTChallenge)."""
+        return self.index + 1
 
     @property
     def speed_kn(self) -> float:
@@ -98,6 +110,8 @@ class SceneGeometry:
     sea_foam_coverage: float = 0.0
     """Mean foam fraction of the sea surface (0–1): the whitecap coverage ``W`` of the wind
     (0 without whitecaps). Its mean reflectance is :data:`ocean.FOAM_REFLECTANCE`."""
+    camera_xy: tuple[float, float] = (0.0, 0.0)
+    """Horizontal camera position (m) the distances are measured from (a ship platform's)."""
 
     def digest(self) -> str:
         """SHA-256 of every mesh and material: two worlds with the same digest render the same
@@ -119,8 +133,9 @@ class SceneGeometry:
         return h.hexdigest()
 
 
-def ocean_params(spec: SceneSpec) -> ocean.OceanParams:
-    """Ocean generator parameters for a scene (Beaufort force, when given, sets the wind)."""
+def ocean_params(spec: SceneSpec, elapsed_s: float = 0.0) -> ocean.OceanParams:
+    """Ocean generator parameters for a scene (Beaufort force, when given, sets the wind),
+    ``elapsed_s`` seconds after ``sea.time_s`` (a sequence's frame time)."""
     sea = spec.sea
     wind = ocean.beaufort_wind_speed(sea.beaufort) if sea.beaufort is not None else sea.wind_speed
     return ocean.OceanParams(
@@ -131,7 +146,8 @@ def ocean_params(spec: SceneSpec) -> ocean.OceanParams:
         direction_deg=sea.direction_deg,
         choppiness=sea.choppiness,
         seed=stream_seed(spec.render.seed, Stream.SEA, sea.seed),
-        time_s=sea.time_s,
+        # Adding 0.0 leaves a still scene's time, and so its bytes, exactly as they were.
+        time_s=sea.time_s + elapsed_s,
     )
 
 
@@ -183,7 +199,12 @@ def build_sea(
     foam = ocean.FoamField(surface, params.wind_speed) if spec.sea.whitecaps and not flat else None
     wakes = ocean.WakeField(moving) if moving else None
     mesh = ocean.build_sea_mesh_data(
-        surface, camera_height_m=camera.height_m, quality=spec.sea.quality, foam=foam, wakes=wakes
+        surface,
+        camera_xy=(camera.x_m, camera.y_m),
+        camera_height_m=camera.height_m,
+        quality=spec.sea.quality,
+        foam=foam,
+        wakes=wakes,
     )
     attributes: dict[str, np.ndarray] = {}
     if mesh.foam is not None and mesh.foam_reflectance is not None and mesh.foam.max() > 0.0:
@@ -322,20 +343,76 @@ def layout_vessels(
     return placements
 
 
+def frame_layout(
+    spec: SceneSpec,
+    camera: Camera,
+    frame: int | None,
+    user_models: dict[int, vessels.VesselModel] | None = None,
+) -> tuple[list[vessels.Placement], list[float]]:
+    """The vessels' placements and speeds (m/s) at ``frame`` of the scene's sequence (None:
+    the scene as written, a still)."""
+    placements = layout_vessels(spec, camera, user_models)
+    speeds = vessel_speeds(spec, placements)
+    if frame is None or spec.sequence is None:
+        return placements, speeds
+    t = spec.sequence.time_s(frame)
+    courses = motion.plan_courses(spec, placements, speeds)
+    xy = (camera.x_m, camera.y_m)
+    return [c.placement_at(t, camera.heading_deg, xy) for c in courses], [
+        c.speed_m_s for c in courses
+    ]
+
+
+def frame_camera(spec: SceneSpec, frame: int | None = None) -> Camera:
+    """The camera at ``frame`` of the scene's sequence (None: the scene's camera).
+
+    On a ``ship`` platform the camera sails with the own ship (:func:`seahaze.motion.own_course`)
+    and rides its heave and pitch: the own ship floats on the surface at the frame's time, its
+    waterline at the surface height under midships, pitched and rolled to the slope over its
+    length and beam (a long hull averages short waves, as the vessels' do); the mast carries the
+    camera ``camera.height_m`` above the waterline, and the view's pitch gains the ship's
+    pitch and roll projected on the view direction. The camera is roll-stabilised: its image
+    stays level (the pinhole camera has no roll).
+    """
+    camera = Camera.from_spec(spec.camera)
+    own = motion.own_course(spec)
+    if frame is None or spec.sequence is None or own is None:
+        return camera
+    t = spec.sequence.time_s(frame)
+    x, y, heading = own.pose(t)
+    surface = ocean.make_surface(ocean_params(spec, t))
+    length = own.placement.length_m
+    beam = motion.OWN_BEAM_FRACTION * length
+    h = math.radians(heading)
+    fwd, port = np.array([math.cos(h), math.sin(h)]), np.array([-math.sin(h), math.cos(h)])
+    centre = np.array([x, y])
+    points = centre + np.array(
+        [0.5 * length * fwd, -0.5 * length * fwd, 0.5 * beam * port, -0.5 * beam * port, 0.0 * fwd]
+    )
+    z = np.asarray(surface.height(points[:, 0], points[:, 1]), np.float64)
+    pitch = math.atan((z[0] - z[1]) / length)
+    roll = math.atan((z[2] - z[3]) / beam)
+    look = math.radians(camera.heading_deg - heading)
+    view_pitch = camera.pitch_deg + math.degrees(pitch * math.cos(look) + roll * math.sin(look))
+    return replace(
+        camera, x_m=x, y_m=y, height_m=camera.height_m + float(z[4]), pitch_deg=view_pitch
+    )
+
+
 def build_vessels(
-    spec: SceneSpec, camera: Camera, surface: ocean.OceanSurface
+    spec: SceneSpec, camera: Camera, surface: ocean.OceanSurface, frame: int | None = None
 ) -> list[VesselInstance]:
     """Vessel meshes placed on the sea; each vessel's waterline follows the surface height.
 
     With ``vessels.follow_slope`` each hull also pitches and rolls to the sea slope between its
     bow and stern and between its sides (finite differences of the surface height), so a ship
-    longer than the waves bridges them instead of following every ripple.
+    longer than the waves bridges them instead of following every ripple. ``frame``: the
+    vessels where their courses (:mod:`seahaze.motion`) put them at that frame's time.
     """
     user_models = load_user_meshes(spec)
     rng = stream_rng(spec.render.seed, Stream.VESSELS)
     instances = []
-    placements = layout_vessels(spec, camera, user_models)
-    speeds = vessel_speeds(spec, placements)
+    placements, speeds = frame_layout(spec, camera, frame, user_models)
     for index, placement in enumerate(placements):
         # Explicit vessels come first in the layout, so index i < len(placed) is placed[i].
         model = user_models.get(index)
@@ -344,7 +421,9 @@ def build_vessels(
         parts = vessels.place_on_sea(
             model, placement, surface.height, follow_slope=spec.vessels.follow_slope
         )
-        waterline = float(surface.height(np.array([placement.x]), np.array([placement.y]))[0])
+        waterline, pitch, roll = vessels.vessel_attitude(
+            model, placement, surface.height, follow_slope=spec.vessels.follow_slope
+        )
         meshes = [
             MeshData(
                 f"vessel{index:03d}_{name}",
@@ -368,16 +447,34 @@ def build_vessels(
                 meshes,
                 speeds[index],
                 model.displacing_draft_m,
+                math.degrees(pitch),
+                math.degrees(roll),
+                _bounds(model),
             )
         )
     return instances
 
 
-def build_geometry(spec: SceneSpec, camera: Camera) -> SceneGeometry:
+def _bounds(
+    model: vessels.VesselModel,
+) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    low, high = np.asarray(model.bounds(), np.float64)
+    return (
+        (float(low[0]), float(low[1]), float(low[2])),
+        (float(high[0]), float(high[1]), float(high[2])),
+    )
+
+
+def build_geometry(spec: SceneSpec, camera: Camera, frame: int | None = None) -> SceneGeometry:
     """Sea and vessels for a scene: the vessels first (the sea needs their wakes), floating on
-    the wave surface (their waterline ignores their own wakes)."""
-    surface = ocean.make_surface(ocean_params(spec))
-    instances = build_vessels(spec, camera, surface)
+    the wave surface (their waterline ignores their own wakes).
+
+    ``frame``: that frame of ``spec.sequence``, the sea advanced to its time and the vessels
+    moved along their courses; None (or a scene without sequence): the scene as written.
+    """
+    elapsed = spec.sequence.time_s(frame) if frame is not None and spec.sequence else 0.0
+    surface = ocean.make_surface(ocean_params(spec, elapsed))
+    instances = build_vessels(spec, camera, surface, frame)
     moving = moving_vessels(instances) if spec.vessels.wakes else []
     sea = build_sea(spec, camera, moving, surface)
     return SceneGeometry(
@@ -387,4 +484,5 @@ def build_geometry(spec: SceneSpec, camera: Camera) -> SceneGeometry:
         instances,
         sea_roughness_near=sea.roughness_near,
         sea_foam_coverage=sea.foam_coverage,
+        camera_xy=(camera.x_m, camera.y_m),
     )

@@ -33,17 +33,19 @@ class SceneDone:
     timings: dict[str, float]
 
 
-def render_job(name: str, spec_data: dict[str, Any], root: str) -> SceneDone:
+def render_job(
+    name: str, spec_data: dict[str, Any], root: str, frame: int | None = None
+) -> SceneDone:
     """Render one scene of a batch and write its files: the task a worker process or a Dask
     worker runs.
 
     The spec travels as plain JSON data and is validated again here, so a worker with another
     pydantic build still renders exactly the planned scene. The render selects the Mitsuba
     variant in the worker itself (Mitsuba and drjit state is per process); only the small
-    :class:`SceneDone` travels back.
+    :class:`SceneDone` travels back. ``frame``: the frame of a sequence this job renders.
     """
     start = time.perf_counter()
-    scene = render_scene(SceneSpec.model_validate(spec_data), name)
+    scene = render_scene(SceneSpec.model_validate(spec_data), name, frame=frame)
     write_scene(Layout(Path(root)), scene)
     scene.timings["total"] = time.perf_counter() - start
     return SceneDone(name, scene.timings)
@@ -75,7 +77,7 @@ class _InProcess:
             signalled.clear()
             start = time.perf_counter()
             try:
-                scene = render_scene(job.spec, job.name, self.note)
+                scene = render_scene(job.spec, job.name, self.note, job.frame)
                 # Files are written only after the whole scene rendered, so a render cut short
                 # by an ignored SIGINT never reaches the folder.
                 if not signalled.is_set():
@@ -156,7 +158,11 @@ class _LocalPool:
         )
         self.futures = {
             self.executor.submit(
-                render_job, job.name, job.spec.model_dump(mode="json", by_alias=True), str(root)
+                render_job,
+                job.name,
+                job.spec.model_dump(mode="json", by_alias=True),
+                str(root),
+                job.frame,
             ): job.name
             for job in jobs
         }
@@ -218,6 +224,7 @@ class _DaskCluster:
                 job.name,
                 job.spec.model_dump(mode="json", by_alias=True),
                 str(root),
+                job.frame,
                 key=f"seahaze-{job.name}-{uuid.uuid4().hex[:12]}",  # unique per run
                 pure=False,
             )

@@ -31,7 +31,7 @@ DATA_YAML_MARK = "# seahaze dataset"
 MAX_MANIFEST_BYTES = 1 << 30
 MAX_MANIFEST_DEPTH = 64
 STATUSES = ("pending", "done", "failed")
-KINDS = ("images", "labels", "exr", "depth", "meta", "coco")
+KINDS = ("images", "labels", "exr", "depth", "meta", "coco", "mot")
 """The folders of a dataset (docs/dataset-format.md)."""
 STRAY_SUFFIXES = (".png", ".jpg", ".jpeg", ".txt")
 """Files in a level folder that the COCO writer reads: one that is not the dataset's would
@@ -319,6 +319,10 @@ def _own_folders(root: Path) -> list[Path]:
         folders.append(base)
         if kind in ("images", "labels", "exr"):
             folders += [p for p in base.iterdir() if is_level_name(p.name) and p.is_dir()]
+        elif kind == "mot":  # mot/<level>/<sequence>/ and its gt/
+            for level in (p for p in base.iterdir() if is_level_name(p.name) and p.is_dir()):
+                for seq in (p for p in level.iterdir() if p.is_dir() and not p.is_symlink()):
+                    folders += [seq] + ([seq / "gt"] if (seq / "gt").is_dir() else [])
     return folders
 
 

@@ -27,6 +27,9 @@ VARIED: dict[str, tuple[str, str]] = {
     "sun_azimuth_deg": ("sun", "azimuth_deg"),
     "wind_speed": ("sea", "wind_speed"),
     "sea_direction_deg": ("sea", "direction_deg"),
+    "camera_height_m": ("camera", "height_m"),
+    "camera_pitch_deg": ("camera", "pitch_deg"),
+    "camera_fov_deg": ("camera", "fov_deg"),
 }
 """Each ``variation`` range and the spec field it sets; the order fixes each one's stream."""
 
@@ -41,6 +44,10 @@ class SceneJob:
     index: int | None = None
     split: str | None = None
     """``train``, ``val`` or ``test``; None in a dataset made without ``--split``."""
+    sequence: str | None = None
+    """Name of the sequence this job is a frame of (None: a still scene)."""
+    frame: int | None = None
+    """Frame of ``spec.sequence`` this job renders (0-based; None: a still scene)."""
 
     def images(self) -> int:
         """Images this scene writes: clean plus one per level."""
@@ -48,7 +55,8 @@ class SceneJob:
 
     def entry(self, status: str) -> dict[str, Any]:
         """This scene's record in ``dataset.json`` (``split`` only when the batch has one, so a
-        dataset made without ``--split`` keeps the manifest it always had)."""
+        dataset made without ``--split`` keeps the manifest it always had; a frame's also names
+        its sequence)."""
         entry: dict[str, Any] = {
             "status": status,
             "seed": self.spec.render.seed,
@@ -57,8 +65,40 @@ class SceneJob:
         }
         if self.split is not None:
             entry["split"] = self.split
-        entry["config"] = self.spec.model_dump(mode="json", by_alias=True)
-        return entry
+        if self.frame is not None:
+            entry |= {"sequence": self.sequence, "frame": self.frame}
+        return entry | {"config": self.spec.model_dump(mode="json", by_alias=True)}
+
+
+def frame_name(sequence: str, frame: int, frames: int) -> str:
+    """File name stem of ``frame`` of a sequence of ``frames``: ``<sequence>_f0007`` (4 digits
+    or more, so names sort in frame order)."""
+    width = max(4, len(str(frames - 1)))
+    return f"{sequence}_f{frame:0{width}d}"
+
+
+def expand_frames(jobs: Sequence[SceneJob]) -> list[SceneJob]:
+    """Each job of a sequence scene replaced by one job per frame (a frame is the unit of
+    work, resumed like a still scene); still scenes as they are."""
+    out: list[SceneJob] = []
+    for job in jobs:
+        sequence = job.spec.sequence
+        if sequence is None:
+            out.append(job)
+            continue
+        out += [
+            SceneJob(
+                frame_name(job.name, i, sequence.frames),
+                job.spec,
+                job.template,
+                job.index,
+                split=job.split,  # a sequence's frames share its split: splits stay disjoint
+                sequence=job.name,
+                frame=i,
+            )
+            for i in range(sequence.frames)
+        ]
+    return out
 
 
 @dataclass(frozen=True)
@@ -165,6 +205,7 @@ def plan_scenes(
                 scene = f"{name}_{i:0{width}d}"
                 scene_split = split.split_of(master, scene) if split else None
                 jobs.append(SceneJob(scene, vary_scene(spec, seed), name, i, scene_split))
+    jobs = expand_frames(jobs)
     counts = Counter(job.name for job in jobs)
     duplicates = sorted(name for name, n in counts.items() if n > 1)
     if duplicates:

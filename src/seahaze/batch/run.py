@@ -41,6 +41,7 @@ from .. import __version__
 from ..dataset import Layout, data_yaml_text, level_entries, manifest, split_list_text
 from ..dataset.card import remove_card, write_card
 from ..dataset.splits import SPLIT_NAMES
+from ..dataset.tracks import write_tracks
 from ..fileio import write_json, write_text
 from ..metric.errors import MetricInputError
 from ..metric.ground_truth import write_coco
@@ -221,9 +222,13 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
     write_split_files(ledger, existing, level_names, reporter)
     ledger.write_manifest()
     if pending:
-        # COCO files and the card describe every scene: stale until the last scene is done.
+        # COCO, track files and the card describe every scene: stale until the last is done.
+        sequences = {job.sequence for job in plan.jobs if job.sequence is not None}
         for level in [CLEAN_LEVEL, *level_names]:
             ledger.layout.coco(level).unlink(missing_ok=True)
+            for seq in sorted(sequences):
+                ledger.layout.mot_gt(level, seq).unlink(missing_ok=True)
+                ledger.layout.mot_seqinfo(level, seq).unlink(missing_ok=True)
         remove_card(root)
     return ledger
 
@@ -418,6 +423,7 @@ def finish(
         ledger.write_manifest()
         if all(s == "done" for s in ledger.status.values()):
             write_coco(ledger.layout.root)
+            write_tracks(ledger.layout.root)
             if not write_card(ledger.layout.root):
                 reporter.warn(
                     f"{ledger.layout.card} was not written by seahaze: kept, no dataset card"

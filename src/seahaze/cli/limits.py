@@ -182,8 +182,14 @@ def check_hard_limits(
             )
 
 
+def frames_of(spec: SceneSpec) -> int:
+    """Units of work (frames) one scene of ``spec`` makes: its sequence's frames, else 1."""
+    return spec.sequence.frames if spec.sequence is not None else 1
+
+
 def estimate(jobs: Sequence[tuple[SceneSpec, int]]) -> Estimate:
-    """The time and memory estimate of rendering ``count`` scenes like each spec."""
+    """The time and memory estimate of rendering ``count`` scenes (or frames) like each spec:
+    a frame costs what a still scene does."""
     serial = parallel = 0.0
     for spec, count in jobs:
         s, p = scene_core_seconds(spec)

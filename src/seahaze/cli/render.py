@@ -87,6 +87,8 @@ def _check_layouts(plan: Any) -> None:
 
     problems = []
     for job in plan.jobs:
+        if job.frame:  # a sequence's frames share its spec: its first frame checks them all
+            continue
         problems += [
             f"scene {job.name}: {'.'.join(str(p) for p in loc)}: {message}"
             for loc, message in layout_problems(job.spec)[:1]
@@ -123,7 +125,7 @@ def _confirm(
     a scene's cost), so a huge job is refused before it is planned; only a resumed folder's
     job is planned to leave out the scenes already done. Returns the plan when made."""
     plan, count = None, args.count or 1
-    job = limits.estimate([(spec, count) for spec, _ in scenes])
+    job = limits.estimate([(spec, count * limits.frames_of(spec)) for spec, _ in scenes])
     reason = limits.confirmation_needed(job)
     if reason and not args.yes and (folder.manifest or {}).get("scenes"):
         plan = make_plan()
@@ -181,6 +183,10 @@ def cmd_render(args: argparse.Namespace) -> int:
         split = SplitFractions.parse(args.split) if args.split is not None else None
     except SplitError as err:
         raise UsageError(f"--split {args.split!r}: {err}") from None
+    if args.frames is not None and not 1 <= args.frames <= limits.MAX_SCENES:
+        raise UsageError(f"--frames {args.frames}: must be within 1..{limits.MAX_SCENES:,}")
+    if args.fps is not None and not 0.0 < args.fps <= 120.0:
+        raise UsageError(f"--fps {args.fps:g}: must be within 0 (excluded)..120 frames/s")
     scenes = []
     for spec, name in load_scenes(paths):
         try:
@@ -192,11 +198,13 @@ def cmd_render(args: argparse.Namespace) -> int:
                 mode=args.mode,
                 variant=args.variant,
                 levels=levels,
+                frames=args.frames,
+                fps=args.fps,
             )
         except OverrideError as err:
             raise UsageError(f"{name}: {err}") from None
         scenes.append((spec, name))
-    total = (args.count or 1) * len(scenes)
+    total = (args.count or 1) * sum(limits.frames_of(spec) for spec, _ in scenes)
     try:
         limits.check_hard_limits([(name, spec) for spec, name in scenes], total, args.workers)
     except limits.LimitError as err:
@@ -309,6 +317,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="NAME",
         help="Mitsuba variant: auto (cuda_ad_rgb where a GPU works, else llvm_ad_rgb), "
         "cuda_ad_rgb or llvm_ad_rgb",
+    )
+    parser.add_argument(
+        "--frames",
+        type=int,
+        metavar="N",
+        help="render each scene as a sequence of N frames (default: the scene's "
+        "sequence.frames; a scene without 'sequence:' is one still frame)",
+    )
+    parser.add_argument(
+        "--fps",
+        type=float,
+        metavar="F",
+        help="frame rate of the sequences (default: the scene's sequence.fps, else 10)",
     )
     parser.add_argument(
         "--scenes",

@@ -47,13 +47,16 @@ def cmd_classes(args: argparse.Namespace) -> int:
 
 
 def cmd_preview(args: argparse.Namespace) -> int:
-    """Write a contact sheet of one scene: clean and levels side by side, boxes drawn."""
+    """Write a contact sheet of one scene: clean and levels side by side, boxes drawn; with
+    ``--sequence``, an animated GIF of a sequence's frames."""
     from ..preview import PreviewError, contact_sheet
 
     root = Path(args.dataset)
     levels = [lv.strip() for lv in args.levels.split(",")] if args.levels else None
     if not (1 <= args.columns <= 64 and 32 <= args.tile_width <= 4096):
         raise UsageError("--columns must be within 1..64 and --tile-width within 32..4096")
+    if args.sequence:
+        return _preview_sequence(args, root, levels)
     try:
         sheet = contact_sheet(
             root, args.scene, levels, args.columns, args.tile_width, not args.no_boxes
@@ -67,6 +70,28 @@ def cmd_preview(args: argparse.Namespace) -> int:
     except (OSError, ValueError) as err:  # ValueError: an unknown image suffix
         raise UsageError(f"--out {out}: cannot write the contact sheet ({err})") from None
     print(f"wrote {out}")
+    return 0
+
+
+def _preview_sequence(args: argparse.Namespace, root: Path, levels: list[str] | None) -> int:
+    """``seahaze preview --sequence NAME``: every frame's contact sheet as an animated GIF."""
+    from ..preview import PreviewError, animation, save_gif
+
+    out = Path(args.out) if args.out else root / f"{args.sequence}.gif"
+    if out.suffix.lower() != ".gif":
+        raise UsageError(f"--out {out}: an animated preview is a .gif file")
+    try:
+        sheets, fps = animation(
+            root, args.sequence, levels, args.columns, args.tile_width, not args.no_boxes
+        )
+    except PreviewError as err:
+        raise UsageError(str(err)) from None
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        save_gif(sheets, out, fps)
+    except OSError as err:
+        raise UsageError(f"--out {out}: cannot write the animation ({err})") from None
+    print(f"wrote {out} ({len(sheets)} frames at {fps:g} frames/s)")
     return 0
 
 
@@ -98,6 +123,11 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     preview.add_argument("--scene", help="scene name (default: the first in dataset.json)")
     preview.add_argument(
+        "--sequence",
+        metavar="NAME",
+        help="animate every frame of sequence NAME into a GIF (default --out DIR/NAME.gif)",
+    )
+    preview.add_argument(
         "--levels", metavar="L1,L2", help="levels to show, e.g. clean,v0300,v1000 (default: all)"
     )
     preview.add_argument("--columns", type=int, default=3, help="tiles per row (default 3)")
@@ -105,7 +135,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "--tile-width", type=int, default=640, help="width of one tile in pixels (default 640)"
     )
     preview.add_argument("--no-boxes", action="store_true", help="do not draw the label boxes")
-    preview.add_argument("--out", metavar="PNG", help="output file (default: DIR/preview.png)")
+    preview.add_argument(
+        "--out", metavar="FILE", help="output file (default: DIR/preview.png, DIR/NAME.gif)"
+    )
     preview.set_defaults(func=cmd_preview)
 
     classes = sub.add_parser("classes", help="list the vessel classes and their YOLO ids")

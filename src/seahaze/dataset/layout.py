@@ -6,6 +6,7 @@ OUT/labels/<level>/<scene>.txt     OUT/depth/<scene>.exr
 OUT/exr/<level>/<scene>.exr        OUT/meta/<scene>.json
 OUT/coco/<level>.json              OUT/README.md (the dataset card)
 OUT/train.txt OUT/val.txt OUT/test.txt (with --split: Ultralytics lists of the clean images)
+OUT/mot/<level>/<sequence>/gt/gt.txt  OUT/mot/<level>/<sequence>/seqinfo.ini  (sequences)
 """
 
 from __future__ import annotations
@@ -36,6 +37,13 @@ class Layout:
 
     def coco(self, level: str) -> Path:
         return self.root / "coco" / f"{level}.json"
+
+    def mot_gt(self, level: str, sequence: str) -> Path:
+        """A sequence's MOTChallenge ground truth at one level (dataset/tracks.py)."""
+        return self.root / "mot" / level / sequence / "gt" / "gt.txt"
+
+    def mot_seqinfo(self, level: str, sequence: str) -> Path:
+        return self.root / "mot" / level / sequence / "seqinfo.ini"
 
     def meta(self, scene: str) -> Path:
         return self.root / "meta" / f"{scene}.json"

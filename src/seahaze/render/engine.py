@@ -17,11 +17,11 @@ from typing import Any
 
 import numpy as np
 
-from .. import annotate, imaging, labels
+from .. import annotate, imaging, labels, motion
 from ..camera import Camera
 from ..spec import SceneSpec
 from ..visibility import CLEAN_LEVEL, channel_extinction, extinction_coefficient, level_name
-from ..world import SceneGeometry, build_geometry
+from ..world import SceneGeometry, build_geometry, frame_camera, layout_vessels, vessel_speeds
 from . import passes
 from .levels import LevelRenderer
 from .passes import Airlight, GeometryPass
@@ -116,17 +116,19 @@ def open_session(
     black_vessels: bool = False,
     reach_m: float = 0.0,
     timings: dict[str, float] | None = None,
+    frame: int | None = None,
 ) -> SceneSession:
     """Select the variant, build the geometry (unless given), load the Mitsuba scene for the
     spec's levels and mode, and trace the geometry pass.
 
-    ``black_vessels`` and ``reach_m`` are for calibration scenes (:func:`build_scene`).
+    ``black_vessels`` and ``reach_m`` are for calibration scenes (:func:`build_scene`);
+    ``frame`` is the frame of ``spec.sequence`` whose geometry is built.
     """
     timings = {} if timings is None else timings
     variant = select_variant(spec.render.variant)
-    camera = Camera.from_spec(spec.camera)
+    camera = frame_camera(spec, frame)
     with _timed(timings, "geometry_build"):
-        geometry = build_geometry(spec, camera) if geometry is None else geometry
+        geometry = build_geometry(spec, camera, frame) if geometry is None else geometry
     with _timed(timings, "scene_load"):
         # The physical mode computes the haze itself: no Mitsuba medium in its scene.
         loaded = build_scene(
@@ -143,10 +145,16 @@ def open_session(
     return SceneSession(spec, variant, camera, geometry, loaded, pixels)
 
 
-def render_scene(spec: SceneSpec, name: str, progress: Progress = _quiet) -> SceneRender:
-    """Render one scene: geometry, clean and every level of ``spec.haze.levels``."""
+def render_scene(
+    spec: SceneSpec, name: str, progress: Progress = _quiet, frame: int | None = None
+) -> SceneRender:
+    """Render one scene: geometry, clean and every level of ``spec.haze.levels``.
+
+    ``frame``: render that frame of ``spec.sequence`` (its meta then carries the frame, its
+    time and every vessel's track id and pose); None renders the scene as written.
+    """
     timings: dict[str, float] = {}
-    session = open_session(spec, timings=timings)
+    session = open_session(spec, timings=timings, frame=frame)
     n_vessels = len(session.geometry.vessels)
     progress(f"{name}: scene loaded ({session.variant}, {n_vessels} vessels)")
     haze, mode = spec.haze, spec.render.mode
@@ -171,7 +179,50 @@ def render_scene(spec: SceneSpec, name: str, progress: Progress = _quiet) -> Sce
         RenderedLevel(key, v, sigma, level.radiance, level.airlight)
         for key, v, sigma, level in zip(names, haze.levels, sigmas, levels, strict=True)
     ]
-    return _assemble(session, name, clean, rendered, timings)
+    scene = _assemble(session, name, clean, rendered, timings)
+    if frame is not None and spec.sequence is not None:
+        scene.meta = sequence_meta(scene.meta, session.geometry, spec, frame, session.camera)
+    return scene
+
+
+def sequence_meta(
+    meta: dict[str, Any], geometry: SceneGeometry, spec: SceneSpec, frame: int, camera: Camera
+) -> dict[str, Any]:
+    """A frame's ``meta`` with its place in the sequence and each vessel's track id and pose
+    (position in m, heading, pitch and roll in deg, vessel-frame bounds in m): enough to
+    re-project the vessel and check its box. A still scene's meta has none of these keys."""
+    sequence = spec.sequence
+    assert sequence is not None
+    by_index = {v.index: v for v in geometry.vessels}
+    # The courses again (a fraction of a second) for the encounter each vessel is in.
+    placements = layout_vessels(spec, Camera.from_spec(spec.camera))
+    courses = motion.plan_courses(spec, placements, vessel_speeds(spec, placements))
+    out_vessels = []
+    for entry in meta["vessels"]:
+        v = by_index[entry["index"]]
+        p = v.placement
+        pose = {
+            "position_m": [p.x, p.y, v.waterline_z],
+            "heading_deg": p.heading_deg,
+            "pitch_deg": v.pitch_deg,
+            "roll_deg": v.roll_deg,
+            "bounds_m": [list(b) for b in v.bounds_m] if v.bounds_m is not None else None,
+        }
+        encounter = courses[v.index].encounter
+        out_vessels.append({"track_id": v.track_id, **entry, "pose": pose, "encounter": encounter})
+    return {
+        **meta,
+        # A ship platform's camera moves, heaves and pitches: position_m is the frame's, and
+        # the view's pitch is recorded beside the scene's.
+        "camera": {**meta["camera"], "pitch_used_deg": camera.pitch_deg},
+        "sequence": {
+            **sequence.model_dump(mode="json"),
+            "frame": frame,
+            "time_s": sequence.time_s(frame),
+            "sea_time_s": spec.sea.time_s + sequence.time_s(frame),
+        },
+        "vessels": out_vessels,
+    }
 
 
 def _assemble(

@@ -23,7 +23,7 @@ alone, :func:`_sea_bsdf` with :attr:`LoadedScene.sea_roughness`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -66,7 +66,7 @@ def _sensor_dict(
     camera: Camera, width: int, height: int, fov_deg: float, pitch_deg: float, inside_haze: bool
 ) -> dict:
     mi = _mi()
-    cam = Camera(camera.height_m, fov_deg, pitch_deg, camera.heading_deg, width, height)
+    cam = replace(camera, fov_deg=fov_deg, pitch_deg=pitch_deg, width=width, height=height)
     forward, _right, up = cam.basis()
     origin = cam.origin
     sensor: dict[str, Any] = {
@@ -282,14 +282,7 @@ def build_scene(
         # a level view sees only clear sky (the same A at every level), so the airlight view
         # then looks from mid-layer, below the camera.
         "sensor_airlight": _sensor_dict(
-            Camera(
-                camera.height_m if camera.height_m < top else 0.5 * top,
-                camera.fov_deg,
-                camera.pitch_deg,
-                camera.heading_deg,
-                camera.width,
-                camera.height,
-            ),
+            replace(camera, height_m=camera.height_m if camera.height_m < top else 0.5 * top),
             AIRLIGHT_RES,
             AIRLIGHT_RES,
             AIRLIGHT_FOV_DEG,
@@ -300,7 +293,7 @@ def build_scene(
         HAZE_BOX_ID: {
             "type": "cube",
             "to_world": mi.ScalarTransform4f()
-            .translate([0.0, 0.0, 0.5 * (top + HAZE_BOTTOM_M)])
+            .translate([camera.x_m, camera.y_m, 0.5 * (top + HAZE_BOTTOM_M)])
             .scale([half_width, half_width, 0.5 * (top - HAZE_BOTTOM_M)]),
             "bsdf": {"type": "null"},
             "interior": {"type": "ref", "id": HAZE_ID},

@@ -11,9 +11,12 @@ from seahaze.vessels.layout import (
     LayoutError,
     PlacedPart,
     Placement,
+    footprint_corners,
+    footprints_overlap,
     place_explicit,
     place_on_sea,
     sample_layout,
+    vessel_attitude,
 )
 from seahaze.vessels.library import (
     CLASS_NAMES,
@@ -22,6 +25,7 @@ from seahaze.vessels.library import (
     VesselClass,
     build_vessel,
     class_id,
+    get_class,
     length_problem,
     sample_speed_m_s,
     speed_problem,
@@ -51,6 +55,9 @@ __all__ = [
     "VesselPart",
     "build_vessel",
     "class_id",
+    "footprint_corners",
+    "footprints_overlap",
+    "get_class",
     "length_problem",
     "load_user_mesh",
     "mesh_search_dirs",
@@ -60,4 +67,5 @@ __all__ = [
     "sample_layout",
     "sample_speed_m_s",
     "speed_problem",
+    "vessel_attitude",
 ]

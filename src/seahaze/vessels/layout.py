@@ -54,6 +54,7 @@ __all__ = [
     "place_on_sea",
     "sample_distance",
     "sample_layout",
+    "vessel_attitude",
     "vessel_to_world_matrix",
 ]
 
@@ -413,6 +414,25 @@ def _heights(height_fn: HeightFn, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.broadcast_to(z, x.shape)
 
 
+def vessel_attitude(
+    model: VesselModel,
+    placement: Placement,
+    height_fn: HeightFn | None = None,
+    slope_fn: SlopeFn | None = None,
+    follow_slope: bool = False,
+) -> tuple[float, float, float]:
+    """Heave (m, the surface height under midships), pitch and roll (rad, bow-up and port-up
+    positive; 0 without ``follow_slope``) of a vessel floating at ``placement``."""
+    z0 = 0.0
+    if height_fn is not None:
+        z0 = float(_heights(height_fn, np.array([placement.x]), np.array([placement.y]))[0])
+    pitch = roll = 0.0
+    if follow_slope:
+        along, across = _slopes(model, placement, height_fn, slope_fn)
+        pitch, roll = float(np.arctan(along)), float(np.arctan(across))
+    return z0, pitch, roll
+
+
 def vessel_to_world_matrix(
     model: VesselModel,
     placement: Placement,
@@ -421,13 +441,7 @@ def vessel_to_world_matrix(
     follow_slope: bool = False,
 ) -> np.ndarray:
     """4×4 homogeneous transform from the vessel frame to the world (metres)."""
-    z0 = 0.0
-    if height_fn is not None:
-        z0 = float(_heights(height_fn, np.array([placement.x]), np.array([placement.y]))[0])
-    pitch = roll = 0.0
-    if follow_slope:
-        along, across = _slopes(model, placement, height_fn, slope_fn)
-        pitch, roll = float(np.arctan(along)), float(np.arctan(across))
+    z0, pitch, roll = vessel_attitude(model, placement, height_fn, slope_fn, follow_slope)
     matrix = np.eye(4)
     matrix[:3, :3] = _rotation(placement.heading_deg, pitch, roll)
     matrix[:3, 3] = (placement.x, placement.y, z0)
