@@ -647,3 +647,18 @@ def test_animated_preview_has_one_frame_per_frame(reference, tmp_path):
         assert gif.size == (128, 36)
         assert gif.info["duration"] == 500
         assert gif.info["loop"] == 0
+
+
+def test_a_sequences_frames_share_one_split_so_splits_stay_scene_disjoint() -> None:
+    """With --split, every frame of a sequence lands in its sequence's split (frames of one
+    sequence in train and test would leak the same vessels and sea into both)."""
+    from seahaze.dataset.splits import SplitFractions
+
+    spec, name = load_scene(REPO / "scenes" / "encounter.yaml")
+    plan = plan_scenes([(spec, name)], 6, split=SplitFractions.parse("0.5,0.25,0.25"))
+    by_sequence: dict[str, set[str]] = {}
+    for job in plan.jobs:
+        by_sequence.setdefault(job.sequence, set()).add(job.split)
+    assert len(by_sequence) == 6
+    assert all(len(splits) == 1 for splits in by_sequence.values())
+    assert len(set().union(*by_sequence.values())) >= 2  # the splits do differ between sequences
