@@ -115,7 +115,7 @@ def main() -> None:
 
     spp = load_scene(DEFAULT)[0].render.spp
     full = (640, 360) if args.quick else (1280, 720)
-    results: dict = {}
+    results: dict = {"load_before": os.getloadavg()[1]}
     with tempfile.TemporaryDirectory(prefix="seahaze-bench-") as tmp:
         work = Path(tmp)
         # Load every kernel once, so each timed render below starts from the disk cache as a
@@ -132,6 +132,7 @@ def main() -> None:
         n_msvd = 2 if args.quick else 4
         results["msvd"] = render([str(MSVD), "--scenes", str(n_msvd)], work / "msvd")
         results["correlation"] = correlations((320, 180), spp, 256 if args.quick else 1024)
+    results["load_after"] = os.getloadavg()[1]
     (ROOT / "out").mkdir(exist_ok=True)
     (ROOT / "out" / "bench_one_pass.json").write_text(json.dumps(results, indent=2))
     write_section(results, spp, full)
@@ -155,7 +156,9 @@ def write_section(r: dict, spp: int, full: tuple[int, int]) -> None:
         "",
         f"Machine: {platform.machine()}, {len(os.sched_getaffinity(0))} vCPU. Each render is a "
         "fresh `seahaze render` process (start-up, geometry, kernels from the disk cache, every "
-        "write included).",
+        "write included). Load average (5 min) of the machine before and after the run: "
+        f"{r.get('load_before', float('nan')):.1f} and {r.get('load_after', float('nan')):.1f} "
+        "(other jobs running make every time longer, and the ratios noisier).",
         "",
         "| measure | value | target |",
         "|---|---|---|",
