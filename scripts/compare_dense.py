@@ -83,7 +83,12 @@ def main() -> None:
         render("reference", args.truncated_spp, 100, levels, max_depth=64)
     )
     masks = region_masks(world.distance_m)
-    results: dict = {"spp": args.spp, "seeds": args.seeds, "levels": {}}
+    results: dict = {
+        "spp": args.spp,
+        "seeds": args.seeds,
+        "truncated_spp": args.truncated_spp,
+        "levels": {},
+    }
     for key in keys:
         ref = meta["levels"][key]["regions"]
         entry: dict = {"reference": ref, "reference_spp": meta["levels"][key]["spp"]}
@@ -128,7 +133,9 @@ def write_section(results: dict, meta: dict, keys: list[str]) -> None:
         "(`scripts/compare_dense.py`): ratio of the region's mean luminance to the "
         f"reference's; `physical` at {results['spp']} spp, mean of {results['seeds']} seeds ± "
         "its standard error; `asm` at the same spp; `reference (max_depth 64)`, the old "
-        "default depth, at 1024 spp. Regions: thirds of the frame, and sky and sea pixels.",
+        f"default depth, at {results.get('truncated_spp', 1024)} spp. Regions: thirds of the "
+        "frame, and sky and sea pixels. A reference that stopped at its time limit before "
+        "reaching its target error says so in its row (its standard error is then larger).",
         "",
         "| V | mode | " + " | ".join(regions) + " |",
         "|---|---|" + "---|" * len(regions),
