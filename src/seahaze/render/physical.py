@@ -225,7 +225,7 @@ class PhysicalRenderer:
             integrator.set_levels(
                 part_sigma, np.full(n, 1.0 / n), albedo, g, part_tables, self.sun_azimuth_rad
             )
-            image = render_radiance(self.loaded, spp, seed, integrator=integrator)
+            image = render_radiance(self.loaded, stratified_spp(spp), seed, integrator=integrator)
             if clean is None:
                 clean = image[..., :3].copy()
             if len(sigma):
@@ -237,8 +237,22 @@ class PhysicalRenderer:
         key = (n_levels, grey)
         if key not in self._integrators:
             top = self.loaded.haze_top_m
-            self._integrators[key] = make_integrator(self.sun, n_levels, grey, top, self.bounces)
+            self._integrators[key] = make_integrator(
+                self.sun, self.sky, n_levels, grey, top, self.bounces
+            )
         return self._integrators[key]
+
+
+def stratified_spp(spp: int) -> int:
+    """The most samples per pixel, at most ``spp``, that Mitsuba's ``multijitter`` sampler takes
+    without rounding up: a grid of ``a × b`` with ``a = ⌊√n⌋`` and ``b = ⌈n / a⌉`` (32 → 30 as
+    5 × 6; every square and 1-4 unchanged). Rounding down keeps a render within the time its
+    ``spp`` promises."""
+    for n in range(max(int(spp), 1), 0, -1):
+        a = math.isqrt(n)
+        if a * -(-n // a) == n:
+            return n
+    return 1
 
 
 def levels_per_pass(width: int, height: int, n_levels: int) -> int:
