@@ -175,17 +175,13 @@ def make_integrator(
             self.n_levels, self.grey = n_levels, grey
             self.bounces, self.camera_points = bounces, camera_points
             self.sun, self.sky = sun, sky
-            # Called through pointers, the sunsky code is one callable per call site, not
-            # inlined: inlined four times per path it made the kernel's compile 7x longer.
-            self.sun_ptr, self.sky_ptr = mi.EmitterPtr(sun), mi.EmitterPtr(sky)
             # The sun's disk, sampled uniformly here: sunsky's own sampling of it also
             # evaluates the sky's 20-Gaussian density, twice the cost for nothing.
-            axis = sun_axis(sun)
-            self.sun_axis = mi.Vector3f(*(float(c) for c in axis))
+            # Opaque kernel parameters, so that another scene's sun reuses the kernel.
+            self.sun_axis = mi.Vector3f(*(opaque_scalar(c) for c in sun_axis(sun)))
             cos_max = sun_cone_cos()
             self.sun_cos = opaque_scalar(cos_max)
             self.sun_pdf = opaque_scalar(1.0 / (2.0 * np.pi * (1.0 - cos_max)))
-            self.sun_frame = mi.Frame3f(self.sun_axis)
             self.top, self.bottom = top_m, HAZE_BOTTOM_M
             self.set_levels(
                 np.full((n_levels, 3), 1e-3),
@@ -236,10 +232,10 @@ def make_integrator(
             over its solid-angle density, as ``Emitter.sample_direction`` returns them."""
             local = mi.warp.square_to_uniform_cone(u, self.sun_cos)
             ds = dr.zeros(mi.DirectionSample3f)
-            ds.d = self.sun_frame.to_world(local)
+            ds.d = mi.Frame3f(self.sun_axis).to_world(local)
             ds.pdf = dr.select(active, self.sun_pdf, 0.0)
             ds.delta = mi.Bool(False)
-            radiance = self.sun_ptr.eval_direction(it, ds, active)
+            radiance = self.sun.eval_direction(it, ds, active)
             return ds, dr.select(active, radiance / self.sun_pdf, 0.0)
 
         # -- slab helpers ---------------------------------------------------------------
@@ -398,10 +394,10 @@ def make_integrator(
                 in_disk = escaped & (dr.dot(ray.d, self.sun_axis) >= self.sun_cos)
                 sun_pdf = dr.select(in_disk, self.sun_pdf, 0.0)
                 mis_sun = dr.select(prev_delta, 1.0, _mis(prev_pdf, sun_pdf))
-                seen += self.sun_ptr.eval(si, in_disk) * mis_sun
-                sky_pdf = self.sky_ptr.pdf_direction(prev_si, ds_hit, escaped & ~prev_delta)
+                seen += self.sun.eval(si, in_disk) * mis_sun
+                sky_pdf = self.sky.pdf_direction(prev_si, ds_hit, escaped & ~prev_delta)
                 mis_sky = dr.select(prev_delta, 1.0, _mis(prev_pdf, sky_pdf))
-                seen += self.sky_ptr.eval(si, escaped) * mis_sky
+                seen += self.sky.eval(si, escaped) * mis_sky
                 sky = dr.select(escaped, beta * seen, 0.0)
                 clean += sky
                 for k in range(self.n_levels):
@@ -417,7 +413,7 @@ def make_integrator(
                 # sunsky's mixture of both), each level attenuated toward the emitter.
                 bsdf = si.bsdf(ray)
                 smooth = active & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-                for sample_light in (self.sample_sun, self.sky_ptr.sample_direction):
+                for sample_light in (self.sample_sun, self.sky.sample_direction):
                     ds_e, em_w = sample_light(si, sampler.next_2d(smooth), smooth)
                     drawn = smooth & (ds_e.pdf > 0)
                     drawn &= ~scene.ray_test(si.spawn_ray(ds_e.d), drawn)
