@@ -23,7 +23,7 @@ from .diffuse_table import DEFAULT_GRID, TableGrid, build_tables
 from .haze_integrator import DEFAULT_BOUNCES, make_integrator
 from .passes import render_radiance
 from .photon_tracer import SeaReflectance
-from .scene import LoadedScene, sunsky_dict
+from .scene import LoadedScene, stratified_spp, sunsky_dict
 
 TABLE_PHOTONS = 1 << 17
 """Photons per level table (half from the sun, half from the sky): ~1 % noise per table bin."""
@@ -241,18 +241,6 @@ class PhysicalRenderer:
                 self.sun, self.sky, n_levels, grey, top, self.bounces
             )
         return self._integrators[key]
-
-
-def stratified_spp(spp: int) -> int:
-    """The most samples per pixel, at most ``spp``, that Mitsuba's ``multijitter`` sampler takes
-    without rounding up: a grid of ``a × b`` with ``a = ⌊√n⌋`` and ``b = ⌈n / a⌉`` (32 → 30 as
-    5 × 6; every square and 1-4 unchanged). Rounding down keeps a render within the time its
-    ``spp`` promises."""
-    for n in range(max(int(spp), 1), 0, -1):
-        a = math.isqrt(n)
-        if a * -(-n // a) == n:
-            return n
-    return 1
 
 
 def levels_per_pass(width: int, height: int, n_levels: int) -> int:

@@ -23,6 +23,7 @@ alone, :func:`_sea_bsdf` with :attr:`LoadedScene.sea_roughness`.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -54,7 +55,7 @@ in the pixel and in every dimension of the path, where the other modes keep ``in
 On the default scene at 32 spp it lowers the sea's rms error 2.5-fold at the same cost: the
 pixel's many wave facets and the first bounce's reflection lobe are stratified
 (docs/benchmarks.md, "Ground-truth noise"). It takes ``a × b`` samples with
-``a = ⌊√spp⌋`` (:func:`seahaze.render.physical.stratified_spp`)."""
+``a = ⌊√spp⌋`` (:func:`stratified_spp`)."""
 BOX_LAYER_WIDTHS = 3.0
 """Least half-width of the haze box in thicknesses ``H`` of the layer (``haze.top_m`` minus its
 bottom). In dense haze the light reaches the camera by diffusing down through the layer, and
@@ -176,6 +177,18 @@ def _vessel_bsdf(rgb: tuple[float, float, float], roughness: float) -> dict:
 BLACK_BSDF: dict = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
 """A perfectly black surface (reflects nothing). Painted steel with a zero paint colour is not
 black: its varnish still reflects the sky specularly; the ``seahaze verify`` targets need zero."""
+
+
+def stratified_spp(spp: int) -> int:
+    """The most samples per pixel, at most ``spp``, that Mitsuba's ``multijitter`` sampler
+    (:data:`PHYSICAL_SAMPLER`) takes without rounding up: a grid of ``a × b`` with
+    ``a = ⌊√n⌋`` and ``b = ⌈n / a⌉`` (32 → 30 as 5 × 6; every square and 1-4 unchanged).
+    Rounding down keeps a render within the time its ``spp`` promises."""
+    for n in range(max(int(spp), 1), 0, -1):
+        a = math.isqrt(n)
+        if a * -(-n // a) == n:
+            return n
+    return 1
 
 
 def sunsky_dict(spec: SceneSpec, sun: bool = True, sky: bool = True) -> dict:
