@@ -176,8 +176,8 @@ def make_integrator(
             self.bounces, self.camera_points = bounces, camera_points
             self.sun, self.sky = sun, sky
             # The sun's disk, sampled uniformly here: sunsky's own sampling of it also
-            # evaluates the sky's 20-Gaussian density, twice the cost for nothing.
-            # Opaque kernel parameters, so that another scene's sun reuses the kernel.
+            # evaluates the sky's 20-Gaussian density, and its density (a float32 solid angle
+            # of 7e-5 sr) is 0.2 % off. Opaque parameters: another sun reuses the kernel.
             self.sun_axis = mi.Vector3f(*(opaque_scalar(c) for c in sun_axis(sun)))
             cos_max = sun_cone_cos()
             self.sun_cos = opaque_scalar(cos_max)
