@@ -420,10 +420,14 @@ def make_integrator(
                     value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(ds_e.d), drawn)
                     mis_e = _mis(ds_e.pdf, bsdf_pdf)
                     direct = dr.select(drawn, beta * value * em_w * mis_e, 0.0)
+                    # Where nothing was drawn the direction may be NaN (the sky's sampler at
+                    # the ends of its erfinv): its transmittance would make 0 · NaN = NaN.
                     _, e_length = self.slab_length(si.p, ds_e.d)
+                    e_length = dr.select(drawn, e_length, 0.0)
                     clean += direct
                     for k in range(self.n_levels):
-                        res[k] += att[k] * self.transmittance(k, e_length) * direct
+                        lit = att[k] * self.transmittance(k, e_length) * direct
+                        res[k] += dr.select(drawn, lit, 0.0)
 
                 # Continue along a BSDF sample.
                 bs, bsdf_weight = bsdf.sample(
