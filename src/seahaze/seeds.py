@@ -48,6 +48,8 @@ class RenderPass(IntEnum):
     """Retired: the per-level physical renders before one pass served every level."""
     PHYSICAL_PASS = 4
     """The physical mode's one pass: the clean image and every level, common random numbers."""
+    DENOISE_FEATURES = 5
+    """The albedo and normal pass that guides the denoiser (``render.denoise: on``)."""
     CONVERGED_REFERENCE = 99
     """Batches of the converged benchmark references (scripts/make_references.py)."""
     VERIFY = 0x7E51F

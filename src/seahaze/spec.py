@@ -579,6 +579,20 @@ class RenderSpec(_Spec):
         "3–6 under the physical sun and sky).",
     )
     write_exr: bool = Field(True, description="Also write linear radiance as EXR for every image.")
+    denoise: Literal["off", "on"] = Field(
+        "off",
+        description="`on`: Intel Open Image Denoise (the optional `pyoidn` package, `pip install "
+        "seahaze[denoise]`) filters the clean image and every level the same way, guided by "
+        "albedo and normal buffers; the PNGs and the contrasts in `meta` are the denoised "
+        "images, the EXRs stay the undenoised linear radiance (`--denoise` overrides; "
+        'docs/benchmarks.md, "Ground-truth noise").',
+    )
+
+    @field_validator("denoise", mode="before")
+    @classmethod
+    def _denoise_from_bool(cls, value: Any) -> Any:
+        # YAML 1.1 (PyYAML) reads a bare on/off as a boolean.
+        return {True: "on", False: "off"}.get(value, value) if isinstance(value, bool) else value
 
     @field_validator("exposure")
     @classmethod
@@ -866,10 +880,11 @@ def with_overrides(
     levels: list[float] | None = None,
     frames: int | None = None,
     fps: float | None = None,
+    denoise: str | None = None,
 ) -> SceneSpec:
     """A copy of ``spec`` with the command line's overrides (None: keep the scene's value);
     ``frames`` or ``fps`` make a still scene a sequence."""
-    render = {"spp": spp, "seed": seed, "mode": mode, "variant": variant}
+    render = {"spp": spp, "seed": seed, "mode": mode, "variant": variant, "denoise": denoise}
     changes: dict[str, Any] = {"render": {k: v for k, v in render.items() if v is not None}}
     sequence = {"frames": frames, "fps": fps}
     if any(v is not None for v in sequence.values()):

@@ -200,10 +200,19 @@ def cmd_render(args: argparse.Namespace) -> int:
                 levels=levels,
                 frames=args.frames,
                 fps=args.fps,
+                denoise=args.denoise,
             )
         except OverrideError as err:
             raise UsageError(f"{name}: {err}") from None
         scenes.append((spec, name))
+    if any(spec.render.denoise == "on" for spec, _ in scenes):
+        from ..render import denoise
+
+        if not denoise.available():
+            raise UsageError(
+                "render.denoise on (or --denoise on) needs the optional package pyoidn: "
+                "pip install 'seahaze[denoise]'"
+            )
     total = (args.count or 1) * sum(limits.frames_of(spec) for spec, _ in scenes)
     try:
         limits.check_hard_limits([(name, spec) for spec, name in scenes], total, args.workers)
@@ -294,6 +303,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     parser.add_argument(
         "--spp", type=int, metavar="N", help="samples per pixel (default: the scene's render.spp)"
+    )
+    parser.add_argument(
+        "--denoise",
+        choices=["off", "on"],
+        help="Intel Open Image Denoise on the PNGs of the clean image and every level (EXRs "
+        "stay undenoised; needs pip install 'seahaze[denoise]'; default: the scene's "
+        "render.denoise)",
     )
     parser.add_argument(
         "--res",

@@ -59,6 +59,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
             seed=args.seed,
             variant=args.variant,
             target_width_deg=args.target_width,
+            denoise=args.denoise == "on",
         )
         report = verify.run_verify(base, levels, settings, progress=say, keep=measurements)
     except (verify.VerifyInputError, VariantError, ValueError) as err:
@@ -159,6 +160,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="NAME",
         help="Mitsuba variant: auto (cuda_ad_rgb where a GPU works, else llvm_ad_rgb), "
         "cuda_ad_rgb or llvm_ad_rgb",
+    )
+    parser.add_argument(
+        "--denoise",
+        choices=["off", "on"],
+        default="off",
+        help="measure denoised images, as render.denoise on writes them (needs pyoidn)",
     )
     parser.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
     parser.set_defaults(func=cmd_verify)

@@ -19,13 +19,14 @@ import numpy as np
 
 from .. import annotate, imaging, labels, motion
 from ..camera import Camera
+from ..seeds import RenderPass, render_seed
 from ..spec import SceneSpec
 from ..visibility import CLEAN_LEVEL, channel_extinction, extinction_coefficient, level_name
 from ..world import SceneGeometry, build_geometry, frame_camera, layout_vessels, vessel_speeds
 from . import passes
 from .levels import LevelRenderer
 from .passes import Airlight, GeometryPass
-from .scene import LoadedScene, build_scene
+from .scene import PHYSICAL_SAMPLER, LoadedScene, build_scene
 from .variant import select_variant
 
 Progress = Callable[[str], None]
@@ -48,6 +49,13 @@ class RenderedLevel:
     """(H, W, 3) float32 linear RGB radiance."""
     airlight: Airlight | None = None
     """The horizon airlight (``asm`` only)."""
+    denoised: np.ndarray | None = None
+    """(H, W, 3) float32 denoised radiance (``render.denoise: on``), else None."""
+
+    @property
+    def image(self) -> np.ndarray:
+        """The radiance its PNG shows: denoised when denoising is on."""
+        return self.radiance if self.denoised is None else self.denoised
 
 
 @dataclass
@@ -72,6 +80,13 @@ class SceneRender:
     write_exr: bool = True
     timings: dict[str, float] = field(default_factory=dict)
     """Wall-clock seconds per pass (progress and logs only, never written to the dataset)."""
+    clean_denoised: np.ndarray | None = None
+    """(H, W, 3) float32 denoised clean radiance (``render.denoise: on``), else None."""
+
+    @property
+    def clean_image(self) -> np.ndarray:
+        """The clean radiance its PNG shows: denoised when denoising is on."""
+        return self.clean if self.clean_denoised is None else self.clean_denoised
 
 
 @contextmanager
@@ -179,7 +194,12 @@ def render_scene(
         RenderedLevel(key, v, sigma, level.radiance, level.airlight)
         for key, v, sigma, level in zip(names, haze.levels, sigmas, levels, strict=True)
     ]
-    scene = _assemble(session, name, clean, rendered, timings)
+    clean_denoised = None
+    if spec.render.denoise == "on":
+        with _timed(timings, "denoise"):
+            clean_denoised = _denoise_all(session, clean, rendered)
+        progress(f"{name}: denoised {1 + len(rendered)} images, {timings['denoise']:.1f} s")
+    scene = _assemble(session, name, clean, rendered, timings, clean_denoised)
     if frame is not None and spec.sequence is not None:
         scene.meta = sequence_meta(scene.meta, session.geometry, spec, frame, session.camera)
     return scene
@@ -225,21 +245,42 @@ def sequence_meta(
     }
 
 
+def scene_exposure(session: SceneSession, clean: np.ndarray) -> float:
+    """The linear exposure of a scene from its clean radiance (``render.exposure``)."""
+    spec, geo = session.spec, session.pixels
+    if spec.render.exposure != "auto":
+        return float(spec.render.exposure)
+    return imaging.auto_exposure(clean, geo.distance_m, geo.elevation_deg())
+
+
+def _denoise_all(session: SceneSession, clean: np.ndarray, levels: list[RenderedLevel]) -> Any:
+    """Denoise the clean image and every level (in place on ``levels``) with one set of
+    feature buffers and the scene's exposure; returns the denoised clean radiance."""
+    from . import denoise
+
+    seed = render_seed(session.spec.render.seed, RenderPass.DENOISE_FEATURES)
+    features = denoise.feature_buffers(session.loaded, seed)
+    exposure = scene_exposure(session, clean)
+    for level in levels:
+        level.denoised = denoise.denoise(level.radiance, features, exposure)
+    return denoise.denoise(clean, features, exposure)
+
+
 def _assemble(
     session: SceneSession,
     name: str,
     clean: np.ndarray,
     levels: list[RenderedLevel],
     timings: dict[str, float],
+    clean_denoised: np.ndarray | None = None,
 ) -> SceneRender:
-    """Exposure, labels and metadata of the rendered passes."""
+    """Exposure, labels and metadata of the rendered passes. The exposure comes from the
+    rendered clean radiance; the contrasts from the images the PNGs show (denoised or not)."""
     spec, camera, geometry, geo = session.spec, session.camera, session.geometry, session.pixels
     elevation = geo.elevation_deg()
-    exposure = (
-        imaging.auto_exposure(clean, geo.distance_m, elevation)
-        if spec.render.exposure == "auto"
-        else float(spec.render.exposure)
-    )
+    exposure = scene_exposure(session, clean)
+    clean_radiance = clean
+    clean = clean if clean_denoised is None else clean_denoised
     boxes = labels.boxes_from_instances(
         geo.instance,
         [v.class_id for v in geometry.vessels],
@@ -257,12 +298,12 @@ def _assemble(
     }
     level_meta = []
     for level in levels:
-        horizon = annotate.horizon_luminance(level.radiance, geo.distance_m, elevation)
+        horizon = annotate.horizon_luminance(level.image, geo.distance_m, elevation)
         if horizon is None and level.airlight is not None:
             horizon = float(imaging.luminance(level.airlight.rgb))
         contrasts[level.name] = (
             level.visibility_m,
-            annotate.apparent_contrasts(level.radiance, geo.instance, n_vessels, horizon),
+            annotate.apparent_contrasts(level.image, geo.instance, n_vessels, horizon),
         )
         entry: dict[str, Any] = {
             "name": level.name,
@@ -294,12 +335,13 @@ def _assemble(
         },
         "levels": level_meta,
         "vessels": annotate.vessel_meta(geometry, boxes, geo.footprint_px, contrasts),
+        "render": render_meta(spec),
     }
     return SceneRender(
         name,
         session.variant,
         exposure,
-        clean,
+        clean_radiance,
         levels,
         geo,
         boxes,
@@ -307,4 +349,29 @@ def _assemble(
         meta,
         spec.render.write_exr,
         timings,
+        clean_denoised,
     )
+
+
+def render_meta(spec: SceneSpec) -> dict[str, Any]:
+    """``meta``'s ``render`` entry: the samples actually taken and what the denoiser did."""
+    from . import denoise
+    from .physical import stratified_spp
+
+    physical = spec.render.mode == "physical"
+    entry: dict[str, Any] = {
+        "spp": spec.render.spp,
+        "spp_used": stratified_spp(spec.render.spp) if physical else spec.render.spp,
+        "sampler": PHYSICAL_SAMPLER if physical else "independent",
+        "denoise": spec.render.denoise,
+    }
+    if spec.render.denoise == "on":
+        entry["denoiser"] = {
+            "library": "Intel Open Image Denoise (pyoidn)",
+            "version": denoise.library_version(),
+            "filter": "RT",
+            "quality": denoise.QUALITY,
+            "features": f"albedo, normal (Mitsuba aov, {denoise.AUX_SPP} spp)",
+            "applied_to": "clean and every level PNG; EXRs undenoised",
+        }
+    return entry

@@ -21,7 +21,12 @@ the next surface or out to the sky), for each level ``k`` of extinction ``σ_k``
 
 * **Surfaces** (sea, vessels) are shaded as Mitsuba's ``path`` does — emitter sampling and BSDF
   sampling with multiple importance sampling — with the light from the emitter attenuated by
-  each level's slab transmittance; the BSDF-sampled ray becomes the next segment.
+  each level's slab transmittance; the BSDF-sampled ray becomes the next segment. Unlike
+  ``path``, the sun and the sky are sampled apart, one sample each, each weighted against BSDF
+  sampling by the power heuristic for its own density (Veach 1997, §9.2, one sample per
+  strategy): ``sunsky`` draws one direction from a mixture (61 % sun, 39 % sky on the default
+  scene), so a sunlit hull got the sun in only some samples, the largest source of its noise
+  (docs/benchmarks.md, "Ground-truth noise").
 
 The surfaces a path meets, its BSDF samples and its shadow rays do not depend on the haze, so
 they are drawn once: the clean image (the path without haze) and every level come from the
@@ -48,6 +53,43 @@ CAMERA_POINTS = 2
 """Stratified in-scattering points on the camera segment (one on later segments)."""
 TINY_OPTICAL_DEPTH = 1e-3
 """Below this, ``1 − e^{−τ}`` is evaluated as ``τ (1 − τ/2)`` (float32 cancellation)."""
+
+
+SUN_APERTURE_DEG = 0.5358
+"""Angular diameter (deg) of Mitsuba's ``sunsky`` sun disk (its ``sun_aperture`` default)."""
+
+
+def opaque_scalar(value: float) -> Any:
+    """A drjit Float kernel parameter (not a literal baked into the kernel)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    return dr.opaque(mi.Float, float(value))
+
+
+def sun_cone_cos() -> float:
+    """Cosine of the half-angle of the cone the sun is sampled in: sunsky's disk, widened by
+    :data:`SUN_CONE_ULPS` float32 steps so that it holds the whole disk however sunsky rounds
+    its own edge (directions outside the disk have no radiance, so a wider cone only wastes a
+    few samples; a narrower one would lose the limb). A float32 value, so that the density
+    ``1 / (2π (1 − cos))`` is that of the cone the kernel samples."""
+    c = np.float32(np.cos(np.radians(0.5 * SUN_APERTURE_DEG)))
+    for _ in range(SUN_CONE_ULPS):
+        c = np.nextafter(c, np.float32(0.0))
+    return float(c)
+
+
+SUN_CONE_ULPS = 4
+"""float32 steps (6e-8 each, 0.5 % of the disk's ``1 − cos``) the sampled cone is widened by."""
+
+
+def sun_axis(sun: Any) -> np.ndarray:
+    """Unit direction (3,) toward the centre of the sun of a ``sunsky`` emitter, world frame."""
+    import mitsuba as mi
+
+    d = mi.traverse(sun)["sun_direction"]
+    axis = np.array([float(d.x[0]), float(d.y[0]), float(d.z[0])])
+    return axis / np.linalg.norm(axis)
 
 
 def _mis(pdf_a: Any, pdf_b: Any) -> Any:
@@ -108,6 +150,7 @@ def _one_minus_exp(tau: Any) -> Any:
 
 def make_integrator(
     sun: Any,
+    sky: Any,
     n_levels: int,
     grey: bool,
     top_m: float,
@@ -118,7 +161,8 @@ def make_integrator(
     Mitsuba variant). ``grey`` levels have one extinction for R, G and B (a third of the
     exponentials). ``sun`` is the emitter whose single scattering is computed with shadow rays
     (the sun part of the scene's ``sunsky``); everything else scattered in the haze comes from
-    the tables.
+    the tables. ``sun`` and ``sky`` (the scene's ``sunsky`` split in two) are the lights the
+    surfaces sample, one sample each per surface interaction.
     """
     import drjit as dr
     import mitsuba as mi
@@ -130,7 +174,14 @@ def make_integrator(
             super().__init__(props)
             self.n_levels, self.grey = n_levels, grey
             self.bounces, self.camera_points = bounces, camera_points
-            self.sun = sun
+            self.sun, self.sky = sun, sky
+            # The sun's disk, sampled uniformly here: sunsky's own sampling of it also
+            # evaluates the sky's 20-Gaussian density, and its density (a float32 solid angle
+            # of 7e-5 sr) is 0.2 % off. Opaque parameters: another sun reuses the kernel.
+            self.sun_axis = mi.Vector3f(*(opaque_scalar(c) for c in sun_axis(sun)))
+            cos_max = sun_cone_cos()
+            self.sun_cos = opaque_scalar(cos_max)
+            self.sun_pdf = opaque_scalar(1.0 / (2.0 * np.pi * (1.0 - cos_max)))
             self.top, self.bottom = top_m, HAZE_BOTTOM_M
             self.set_levels(
                 np.full((n_levels, 3), 1e-3),
@@ -175,6 +226,17 @@ def make_integrator(
             fine = upsampled_tables(tables, self.n_levels)
             self.grid = fine.shape[1:4]  # (n_mu, n_phi, n_z fine)
             self.table = mi.Float(fine.ravel())
+
+        def sample_sun(self, it: Any, u: Any, active: Any) -> tuple[Any, Any]:
+            """A direction uniform in the sun's disk (no visibility test) and its radiance
+            over its solid-angle density, as ``Emitter.sample_direction`` returns them."""
+            local = mi.warp.square_to_uniform_cone(u, self.sun_cos)
+            ds = dr.zeros(mi.DirectionSample3f)
+            ds.d = mi.Frame3f(self.sun_axis).to_world(local)
+            ds.pdf = dr.select(active, self.sun_pdf, 0.0)
+            ds.delta = mi.Bool(False)
+            radiance = self.sun.eval_direction(it, ds, active)
+            return ds, dr.select(active, radiance / self.sun_pdf, 0.0)
 
         # -- slab helpers ---------------------------------------------------------------
         def slab_length(self, p: Any, d: Any, t_end: Any = None) -> tuple[Any, Any]:
@@ -324,14 +386,19 @@ def make_integrator(
                     active & (length > 0.0),
                 )
 
-                # The sky (or sun) at the end of an escaping segment, with MIS against the
-                # emitter sampling of the surface it left.
+                # The sky and the sun at the end of an escaping segment, each with MIS against
+                # its own emitter sampling at the surface the segment left.
                 escaped = active & ~si.is_valid()
-                emitter = si.emitter(scene, escaped)
                 ds_hit = mi.DirectionSample3f(scene, si, prev_si)
-                em_pdf = scene.pdf_emitter_direction(prev_si, ds_hit, escaped & ~prev_delta)
-                mis_hit = dr.select(prev_delta, 1.0, _mis(prev_pdf, em_pdf))
-                sky = dr.select(escaped, beta * emitter.eval(si, escaped) * mis_hit, 0.0)
+                seen = mi.Color3f(0.0)
+                in_disk = escaped & (dr.dot(ray.d, self.sun_axis) >= self.sun_cos)
+                sun_pdf = dr.select(in_disk, self.sun_pdf, 0.0)
+                mis_sun = dr.select(prev_delta, 1.0, _mis(prev_pdf, sun_pdf))
+                seen += self.sun.eval(si, in_disk) * mis_sun
+                sky_pdf = self.sky.pdf_direction(prev_si, ds_hit, escaped & ~prev_delta)
+                mis_sky = dr.select(prev_delta, 1.0, _mis(prev_pdf, sky_pdf))
+                seen += self.sky.eval(si, escaped) * mis_sky
+                sky = dr.select(escaped, beta * seen, 0.0)
                 clean += sky
                 for k in range(self.n_levels):
                     res[k] += att[k] * segment[k] * sky
@@ -342,19 +409,25 @@ def make_integrator(
                 for k in range(self.n_levels):
                     att[k] = att[k] * segment[k]
 
-                # Surface: emitter sampling, each level attenuated toward the emitter.
+                # Surface: one emitter sample from the sun and one from the sky (not one from
+                # sunsky's mixture of both), each level attenuated toward the emitter.
                 bsdf = si.bsdf(ray)
                 smooth = active & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-                ds_e, em_w = scene.sample_emitter_direction(
-                    si, sampler.next_2d(smooth), True, smooth
-                )
-                value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(ds_e.d), smooth)
-                mis_e = dr.select(ds_e.delta, 1.0, _mis(ds_e.pdf, bsdf_pdf))
-                direct = dr.select(smooth & (ds_e.pdf > 0), beta * value * em_w * mis_e, 0.0)
-                _, e_length = self.slab_length(si.p, ds_e.d)
-                clean += direct
-                for k in range(self.n_levels):
-                    res[k] += att[k] * self.transmittance(k, e_length) * direct
+                for sample_light in (self.sample_sun, self.sky.sample_direction):
+                    ds_e, em_w = sample_light(si, sampler.next_2d(smooth), smooth)
+                    drawn = smooth & (ds_e.pdf > 0)
+                    drawn &= ~scene.ray_test(si.spawn_ray(ds_e.d), drawn)
+                    value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(ds_e.d), drawn)
+                    mis_e = _mis(ds_e.pdf, bsdf_pdf)
+                    direct = dr.select(drawn, beta * value * em_w * mis_e, 0.0)
+                    # Where nothing was drawn the direction may be NaN (the sky's sampler at
+                    # the ends of its erfinv): its transmittance would make 0 · NaN = NaN.
+                    _, e_length = self.slab_length(si.p, ds_e.d)
+                    e_length = dr.select(drawn, e_length, 0.0)
+                    clean += direct
+                    for k in range(self.n_levels):
+                        lit = att[k] * self.transmittance(k, e_length) * direct
+                        res[k] += dr.select(drawn, lit, 0.0)
 
                 # Continue along a BSDF sample.
                 bs, bsdf_weight = bsdf.sample(

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..haze import HAZE_BOTTOM_M, Extinction, asm_composite, path_length_in_slab
 from ..seeds import RenderPass, render_seed
-from .scene import LoadedScene
+from .scene import LoadedScene, stratified_spp
 
 GEOMETRY_MAX_CROSSINGS = 16
 """Surfaces a pixel ray walks through: the haze box (twice at most) and vessels behind vessels."""
@@ -139,6 +139,8 @@ def render_radiance(
     import mitsuba as mi
 
     scene = loaded.clean_scene if clean and loaded.clean_scene is not None else loaded.scene
+    if not loaded.has_haze_box and sensor_index == 0:
+        spp = stratified_spp(spp)  # the physical scene's multijitter sampler: no rounding up
     image = mi.render(scene, sensor=sensor_index, spp=spp, seed=seed, integrator=integrator)
     # Mitsuba 3.9's sunsky gives the sun a negative blue radiance below about 3 deg elevation
     # (RGB -58 for +3819 red: its reddened colour lies outside the sRGB gamut), so the sun, its

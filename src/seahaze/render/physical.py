@@ -23,7 +23,7 @@ from .diffuse_table import DEFAULT_GRID, TableGrid, build_tables
 from .haze_integrator import DEFAULT_BOUNCES, make_integrator
 from .passes import render_radiance
 from .photon_tracer import SeaReflectance
-from .scene import LoadedScene, sunsky_dict
+from .scene import LoadedScene, stratified_spp, sunsky_dict
 
 TABLE_PHOTONS = 1 << 17
 """Photons per level table (half from the sun, half from the sky): ~1 % noise per table bin."""
@@ -225,7 +225,7 @@ class PhysicalRenderer:
             integrator.set_levels(
                 part_sigma, np.full(n, 1.0 / n), albedo, g, part_tables, self.sun_azimuth_rad
             )
-            image = render_radiance(self.loaded, spp, seed, integrator=integrator)
+            image = render_radiance(self.loaded, stratified_spp(spp), seed, integrator=integrator)
             if clean is None:
                 clean = image[..., :3].copy()
             if len(sigma):
@@ -237,7 +237,9 @@ class PhysicalRenderer:
         key = (n_levels, grey)
         if key not in self._integrators:
             top = self.loaded.haze_top_m
-            self._integrators[key] = make_integrator(self.sun, n_levels, grey, top, self.bounces)
+            self._integrators[key] = make_integrator(
+                self.sun, self.sky, n_levels, grey, top, self.bounces
+            )
         return self._integrators[key]
 
 

@@ -151,8 +151,10 @@ def render_level_batches(
     level_index: int,
     batches: int,
     width_deg: float = TARGET_WIDTH_DEG,
+    denoise: bool = False,
 ) -> LevelMeasurement:
-    """Render the calibration scene of one level ``batches`` times with independent seeds."""
+    """Render the calibration scene of one level ``batches`` times with independent seeds;
+    ``denoise``: each batch's radiance through the denoiser, as a dataset's PNGs."""
     camera = Camera.from_spec(spec.camera)
     haze = spec.haze
     targets = layout_targets(camera, visibility_m, width_deg=width_deg)
@@ -170,14 +172,25 @@ def render_level_batches(
     distances = _check_target_pixels(session.pixels, targets)
     sigma = channel_extinction(visibility_m, haze.threshold, haze.extinction_spectrum)
     spp = max(1, spec.render.spp // batches)
-    renderer = session.level_renderer(session.render_clean(spp))
+    clean = session.render_clean(spp)
+    renderer = session.level_renderer(clean)
+    features, exposure = None, 1.0
+    if denoise:
+        from ..render import denoise as oidn
+
+        seed = render_seed(spec.render.seed, RenderPass.DENOISE_FEATURES, level_index)
+        features = oidn.feature_buffers(session.loaded, seed)
+        geo = session.pixels
+        exposure = imaging.auto_exposure(clean, geo.distance_m, geo.elevation_deg())
     lum, total = [], np.zeros((camera.height, camera.width, 3))
     for b in range(batches):
         seed = render_seed(spec.render.seed, RenderPass.VERIFY, level_index, b)
         render = spec.render.model_copy(update={"spp": spp, "seed": seed})
-        level = renderer.render(sigma, level_index, render)
-        lum.append(imaging.luminance(level.radiance))
-        total += level.radiance
+        radiance = renderer.render(sigma, level_index, render).radiance
+        if features is not None:
+            radiance = oidn.denoise(radiance, features, exposure)
+        lum.append(imaging.luminance(radiance))
+        total += radiance
     return LevelMeasurement(targets, distances, np.stack(lum), (total / batches).astype(np.float32))
 
 
@@ -276,6 +289,8 @@ class VerifySettings:
     variant: str | None = None
     """Mitsuba variant; None keeps the base scene's."""
     target_width_deg: float = TARGET_WIDTH_DEG
+    denoise: bool = False
+    """Denoise every batch's level as ``render.denoise: on`` does (needs ``pyoidn``)."""
 
     def check(self) -> None:
         """Raise :class:`VerifyInputError` for settings that cannot work."""
@@ -338,7 +353,9 @@ def run_verify(
     for i, v in enumerate(visibilities_m):
         t0 = time.perf_counter()
         name = level_name(v)
-        measurement = render_level_batches(spec, sea, v, i, settings.batches, width)
+        measurement = render_level_batches(
+            spec, sea, v, i, settings.batches, width, settings.denoise
+        )
         tau = sky_optical_depth(spec, v)
         seconds = time.perf_counter() - t0
         report = analyse_level(name, v, threshold, measurement, settings.tolerance, seconds, tau)
@@ -369,6 +386,7 @@ def _run_config(
         "variant": variant,
         "spp": spec.render.spp,
         "batches": settings.batches,
+        "denoise": "on" if settings.denoise else "off",
         "spp_per_batch": spec.render.spp // settings.batches,
         "resolution": list(settings.resolution),
         "seed": spec.render.seed,
