@@ -330,6 +330,10 @@ def _percent_pm(value: float, stderr: float) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer sample counts")
+    parser.add_argument(
+        "--configs",
+        help="modes and sample counts to run instead, e.g. reference:64,asm:64,physical:16+256",
+    )
     parser.add_argument("--child", nargs=3, metavar=("MODE", "SPP", "OUT"), help=argparse.SUPPRESS)
     parser.add_argument("--work", type=Path, default=ROOT / "out" / "bench-modes")
     args = parser.parse_args()
@@ -337,7 +341,13 @@ def main() -> None:
         child(args.child[0], int(args.child[1]), Path(args.child[2]))
         return
     args.work.mkdir(parents=True, exist_ok=True)
-    rows = run_configs(QUICK if args.quick else CONFIGS, args.work)
+    configs = QUICK if args.quick else CONFIGS
+    if args.configs:
+        configs = {
+            mode: tuple(int(n) for n in spps.split("+"))
+            for mode, spps in (item.split(":") for item in args.configs.split(","))
+        }
+    rows = run_configs(configs, args.work)
     table = analyse(rows)
     (args.work / "results.json").write_text(json.dumps(table, indent=2))
     _, _, meta = load_references()
