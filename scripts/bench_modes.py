@@ -246,9 +246,13 @@ def strip(rows: list[dict]) -> None:
     exposure = auto_exposure(ref_rgb["clean"], first["distance"], first["elevation"])
     scale = 4
     h, w = first["distance"].shape
-    columns = [("reference (converged)", None)] + [
-        (f"{m} {STRIP_SPP[m]} spp", m) for m in ("reference", "asm", "physical")
-    ]
+    # Each mode at the sample count closest to STRIP_SPP among those that were run.
+    spp_of = {
+        m: min((r["spp"] for r in rows if r["mode"] == m), key=lambda n: abs(n - STRIP_SPP[m]))
+        for m in ("reference", "asm", "physical")
+        if any(r["mode"] == m for r in rows)
+    }
+    columns = [("reference (converged)", None)] + [(f"{m} {n} spp", m) for m, n in spp_of.items()]
     sheet = Image.new("RGB", (len(columns) * w * scale, len(LEVELS) * (h * scale + 14)), "black")
     draw = ImageDraw.Draw(sheet)
     for i, v in enumerate(LEVELS):
@@ -257,9 +261,7 @@ def strip(rows: list[dict]) -> None:
             if mode is None:
                 rgb = ref_rgb[f"v{int(v):04d}"]
             else:
-                match = [r for r in rows if r["mode"] == mode and r["spp"] == STRIP_SPP[mode]]
-                if not match:
-                    continue
+                match = [r for r in rows if r["mode"] == mode and r["spp"] == spp_of[mode]]
                 rgb = match[0]["images"][i]
             tile = Image.fromarray(to_srgb8(rgb, exposure)).resize((w * scale, h * scale), 0)
             sheet.paste(tile, (j * w * scale, y0 + 14))
