@@ -43,10 +43,14 @@ def _clean(spec: SceneSpec, geometry) -> np.ndarray:
     return open_session(spec, geometry).render_clean()
 
 
-def test_clean_is_the_same_in_every_mode_and_for_any_haze(geometry):
-    expected = _clean(BASE, geometry)  # physical: its scene never had a haze box
-    assert np.isfinite(expected).all() and expected.mean() > 0
-    for mode, haze in CASES:
+def test_clean_is_the_same_for_any_haze_in_every_mode(geometry):
+    """Within a mode the clean image does not depend on the haze settings, to the byte. (The
+    modes' clean images are different estimators of the same image: ``reference`` and ``asm``
+    render it with Mitsuba's path tracer, ``physical`` with its own integrator, which samples
+    sun and sky apart.)"""
+    for mode, haze in [*CASES, ("physical", {"top_m": 1.0, "levels": [50.0, 4000.0]})]:
+        expected = _clean(with_changes(BASE, {"render": {"mode": mode}}), geometry)
+        assert np.isfinite(expected).all() and expected.mean() > 0
         spec = with_changes(BASE, {"render": {"mode": mode}, "haze": haze})
         assert np.array_equal(_clean(spec, geometry), expected), (mode, haze)
 
