@@ -37,6 +37,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_passes import replace_section  # noqa: E402
+from measure_gt_variance import regions  # noqa: E402
 
 DEFAULT = ROOT / "scenes" / "default.yaml"
 OUT = ROOT / "out" / "gt_noise"
@@ -102,17 +103,6 @@ def render(res: tuple[int, int], spp: int, seed: int, denoise: bool, out: Path, 
         levels=np.array(haze.levels, float),
     )
     print(f"{out.name}: {seconds:.1f} s + denoise {denoise_s:.1f} s", flush=True)
-
-
-def regions(session: Any) -> dict[str, np.ndarray]:
-    """Boolean masks (H, W): sky, sea and one per vessel class present."""
-    geo = session.pixels
-    masks = {"sky": ~np.isfinite(geo.distance_m)}
-    masks["sea"] = np.isfinite(geo.distance_m) & (geo.instance < 0)
-    for vessel in session.geometry.vessels:
-        masks.setdefault(vessel.kind, np.zeros_like(masks["sky"]))
-        masks[vessel.kind] |= geo.instance == vessel.index
-    return {k: m for k, m in masks.items() if m.any()}
 
 
 def compare(run: np.ndarray, ref: np.ndarray, session: Any) -> dict[str, Any]:
