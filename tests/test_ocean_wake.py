@@ -10,15 +10,17 @@ import numpy as np
 import pytest
 from scipy.ndimage import maximum_filter1d
 
-from seahaze.ocean.wake import (
+from seahaze.ocean.kelvin import (
     KELVIN_HALF_ANGLE_RAD,
-    KNOT_M_S,
     WRAP_DECAY,
+    _shape_transform,
+    transverse_wavelength,
+)
+from seahaze.ocean.wake import (
+    KNOT_M_S,
     MovingVessel,
     ShipWaves,
     WakeField,
-    _shape_transform,
-    transverse_wavelength,
     wake_foam,
     wake_foam_decay_s,
     wake_height,
@@ -212,6 +214,17 @@ def test_wake_field_rotates_with_heading_and_superposes() -> None:
     fa, fb = ShipWaves(east).foam(x, y), ShipWaves(other).foam(x, y)
     np.testing.assert_allclose(field.foam(x, y), 1.0 - (1.0 - fa) * (1.0 - fb))
     assert field.height(x, y).tobytes() == WakeField([east, other]).height(x, y).tobytes()
+
+
+def test_a_moved_vessel_carries_the_same_waves_from_one_solved_grid() -> None:
+    """The field depends on hull and speed only: a vessel moved and turned (the next frame of a
+    sequence) samples the same solved grid, shifted and rotated with it."""
+    here = MovingVessel(0.0, 0.0, 0.0, 7.0, 100.0, 16.0, 6.0)
+    there = MovingVessel(250.0, -40.0, 90.0, 7.0, 100.0, 16.0, 6.0)
+    a, b = ShipWaves(here), ShipWaves(there)
+    assert a._height is b._height and a._slope is b._slope
+    xi, eta = np.random.default_rng(3).uniform(-400.0, 60.0, (2, 300))
+    np.testing.assert_allclose(b.height(250.0 - eta, -40.0 + xi), a.height(xi, eta), atol=1e-9)
 
 
 def test_vessel_classes_have_cited_service_speeds() -> None:

@@ -46,10 +46,11 @@ from .cox_munk import (
 )
 from .fft import FFTCascade, FFTOcean, fft_choppiness_limit
 from .gerstner import GerstnerOcean
+from .kelvin import transverse_wavelength
 from .mesh import SeaMesh, build_sea_mesh, build_sea_mesh_data, horizon_gap_angle
 from .spectra import SeaSpectrum
 from .surface import make_surface
-from .wake import MovingVessel, ShipWaves, WakeField, transverse_wavelength, wake_foam, wake_height
+from .wake import MovingVessel, ShipWaves, WakeField, wake_foam, wake_height
 from .whitecaps import (
     FOAM_REFLECTANCE,
     FRESH_FOAM_REFLECTANCE,

@@ -1,39 +1,10 @@
 """Ship waves and wakes: the Kelvin wave pattern, the bow wave and the turbulent foam wake of
 moving vessels, as height and foam fields to add to the sea surface.
 
-Waves (linear potential flow, deep water)
-    A hull moving at speed ``U`` is represented by a pressure distribution on the free surface
-    that, at rest, would press the water down by the hull's draft: ``p = rho·g·d(xi, eta)``, with
-    ``d = T·(1 - s_xi⁴)·(1 - s_eta²)`` over the waterplane (``s_xi = 2·xi/L``,
-    ``s_eta = 2·eta/B``; block coefficient 0.53) in the vessel frame (``xi`` toward the bow,
-    ``eta`` to port). This is the "pressure ship" of Havelock (1909, *Proc. R. Soc. A* 82,
-    276–300; Lamb 1932, *Hydrodynamics*, §§242–256, waves of a travelling pressure). The steady
-    linearised free-surface problem is solved exactly in Fourier space,
-
-        zeta_hat(k) = -d_hat(k) · (U·k_x + i·mu)² / (g·|k| - (U·k_x + i·mu)²),
-
-    where the hydrostatic part ``-d`` (the hull's own displacement, hidden inside the hull) has
-    been removed, so a vessel at rest makes no waves. Rayleigh's small damping ``mu`` selects
-    the waves that trail the ship (the radiation condition). ``d_hat`` is the analytic Fourier
-    transform of the hull shape (Gauss–Legendre quadrature), so small hulls need no fine grid.
-    Deep-water dispersion puts every free wave on ``g·k = (U·k_x)²``: a wave whose crests run at
-    angle ``theta`` to the track has ``k = k0·sec²theta``, ``k0 = g/U²``; stationary phase
-    confines the pattern to the Kelvin wedge of half-angle ``asin(1/3) = 19.47°`` (Kelvin 1887;
-    Lighthill 1978, *Waves in Fluids*, §3.10), with transverse waves of wavelength
-    ``2·pi·U²/g`` along the track and divergent waves toward the cusps. The same solution holds
-    the bow wave (the crest that stands at the stem) and the trough along the hull. The
-    amplitude scales with the draft, and with length, beam and speed through ``d_hat`` at the
-    free-wave wavenumbers, i.e. through the Froude number ``U/sqrt(g·L)``: interference of bow
-    and stern systems, humps and hollows of wave making. At large Froude numbers the angle of
-    the highest waves shrinks below Kelvin's (Rabaud & Moisy 2013, *Phys. Rev. Lett.* 110,
-    214503), which this linear model reproduces; the wedge itself stays 19.47°.
-
-    Approximations: linear (no breaking, no crest sharpening; steep bow waves of fast hulls
-    are overestimated), a smooth parametric hull instead of the real lines, deep water, no
-    viscosity or interaction with the wind sea, a straight course at constant speed. The field
-    is computed on a periodic grid (waves shorter than two grid spacings are dropped; the
-    damping is set so that copies wrapped around the grid are below ``e⁻³``) and tapered to
-    zero over the last fifth of the wake length :func:`wake_length`.
+Waves
+    The steady Kelvin wave field of each hull comes from :mod:`seahaze.ocean.kelvin` (Havelock's
+    pressure ship, solved on a grid in the vessel's frame); here it is placed at the vessel's
+    position and heading and sampled at world points.
 
 Breaking (bow wave foam)
     Where the linear wave slope ``|grad zeta|`` exceeds :data:`BREAKING_SLOPE` (0.44, the slope
@@ -58,26 +29,22 @@ Turbulent foam wake
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import fft as sfft
 
 from .base import cell_samples, lowpass_weight
+from .kelvin import (
+    BREAKING_SLOPE,
+    smoothstep,
+    wave_grid,
+)
 from .spectra import GRAVITY
 
 KNOT_M_S = 1852.0 / 3600.0
 """One knot (international nautical mile per hour) in m/s."""
-
-KELVIN_HALF_ANGLE_RAD = math.asin(1.0 / 3.0)
-"""Half-angle of the Kelvin wedge, ``asin(1/3) = 19.47°`` (rad)."""
-
-BREAKING_SLOPE = 0.44
-"""Wave slope above which a crest breaks: ``a·k`` of the steepest Stokes wave
-(``H/lambda = 0.142``, Michell 1893)."""
 
 BUBBLE_RISE_M_S = 0.2
 """Rise speed of millimetre air bubbles in sea water (m/s; Clift, Grace & Weber 1978)."""
@@ -85,34 +52,11 @@ BUBBLE_RISE_M_S = 0.2
 MIN_WAKE_FOAM_DECAY_S = 2.0
 """Shortest e-folding age of wake foam (s), for hulls of almost no draft."""
 
-WAKE_SHIP_LENGTHS = 12.0
-"""The wake is computed for at least this many ship lengths behind the vessel..."""
-
-WAKE_TRANSVERSE_WAVELENGTHS = 10.0
-"""...and at least this many transverse wavelengths ``2·pi·U²/g``..."""
-
-MAX_WAKE_LENGTH_M = 6000.0
-"""...but not beyond this distance (m)."""
-
-GRID_POINTS_PER_WAVELENGTH = 12.0
-"""Grid points per transverse wavelength (the divergent waves are shorter)..."""
-
-GRID_POINTS_PER_LENGTH = 8.0
-"""...and at least this many per ship length (fast small craft make waves of hull scale)."""
-
-MAX_GRID_POINTS = 2048
-"""Largest grid along either axis."""
-
 FOAM_CUTOFF = 1.0e-3
 """Turbulent wake foam below this fraction is ignored when finding where a wake has foam."""
 
 MAX_FOAM_SAMPLES = 16
 """Most samples per axis when a mesh vertex's footprint is averaged over the wake foam."""
-
-WRAP_DECAY = 3.0
-"""The damping lowers a wave by ``exp(-WRAP_DECAY)`` over one period of the grid."""
-
-_GAUSS_NODES, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(96)
 
 
 @dataclass(frozen=True)
@@ -159,29 +103,6 @@ def wake_foam_decay_s(vessel: MovingVessel) -> float:
     return max(vessel.draft_m / BUBBLE_RISE_M_S, MIN_WAKE_FOAM_DECAY_S)
 
 
-def transverse_wavelength(speed_m_s: float, gravity: float = GRAVITY) -> float:
-    """Wavelength (m) of the transverse ship waves, ``2·pi·U²/g`` (the deep-water wave whose
-    phase speed equals the ship's speed ``U`` in m/s)."""
-    return 2.0 * math.pi * speed_m_s**2 / gravity
-
-
-def wake_length(vessel: MovingVessel, gravity: float = GRAVITY) -> float:
-    """Distance behind midships (m) over which the wave field is computed: the larger of
-    :data:`WAKE_SHIP_LENGTHS` ship lengths and :data:`WAKE_TRANSVERSE_WAVELENGTHS` transverse
-    wavelengths, at most :data:`MAX_WAKE_LENGTH_M`."""
-    lam0 = transverse_wavelength(vessel.speed_m_s, gravity)
-    wanted = max(WAKE_SHIP_LENGTHS * vessel.length_m, WAKE_TRANSVERSE_WAVELENGTHS * lam0)
-    return min(wanted, MAX_WAKE_LENGTH_M)
-
-
-def _shape_transform(k: np.ndarray, half_length: float, power: int) -> np.ndarray:
-    """``∫ (1 - s^power)·exp(-i·k·a·s)·a ds`` over ``s in [-1, 1]`` (``a = half_length``), the
-    Fourier transform of one factor of the hull shape (real: the shape is even)."""
-    s = _GAUSS_NODES
-    shape = 1.0 - s**power
-    return half_length * (np.cos(np.outer(k, s) * half_length) @ (_GAUSS_WEIGHTS * shape))
-
-
 class ShipWaves:
     """The steady wave field of one :class:`MovingVessel` on a grid in its own frame.
 
@@ -195,67 +116,15 @@ class ShipWaves:
         self.moving = vessel.speed_m_s > 0.0
         if not self.moving:
             return
-        u = vessel.speed_m_s
-        self.wavelength_m = transverse_wavelength(u, gravity)
-        self.length_behind_m = wake_length(vessel, gravity)
-        # Grid: behind, 1.5 wake lengths (the last half only absorbs what the damping leaves);
-        # ahead, half the ship plus two transverse wavelengths; across, the wedge of that
-        # length plus the beam.
-        self.ahead_m = 0.5 * vessel.length_m + 2.0 * self.wavelength_m
-        behind = 1.5 * self.length_behind_m
-        half_width = math.tan(KELVIN_HALF_ANGLE_RAD) * behind + vessel.beam_m + self.wavelength_m
-        extent_x = behind + self.ahead_m
-        extent_y = 2.0 * half_width
-        spacing = min(
-            self.wavelength_m / GRID_POINTS_PER_WAVELENGTH, vessel.length_m / GRID_POINTS_PER_LENGTH
-        )
-        spacing = max(spacing, max(extent_x, extent_y) / MAX_GRID_POINTS)
-        nx = sfft.next_fast_len(math.ceil(extent_x / spacing), real=True)
-        ny = sfft.next_fast_len(math.ceil(extent_y / spacing), real=True)
-        self.spacing_m = spacing
-        self.origin = (self.ahead_m - nx * spacing, -0.5 * ny * spacing)  # (xi, eta) of [0, 0]
-        self.shape = (ny, nx)
-        self._height, self._slope = self._solve(nx, ny, spacing)
-
-    def _solve(self, nx: int, ny: int, h: float) -> tuple[np.ndarray, np.ndarray]:
-        v, g = self.vessel, self.gravity
-        u = v.speed_m_s
-        kx = 2.0 * math.pi * np.fft.fftfreq(nx, d=h)
-        ky = 2.0 * math.pi * np.fft.fftfreq(ny, d=h)
-        mu = WRAP_DECAY * u / (2.0 * nx * h)  # amplitude ~ exp(-2·mu·|xi|/U)
-        d_hat = v.draft_m * np.outer(
-            _shape_transform(ky, 0.5 * v.beam_m, 2), _shape_transform(kx, 0.5 * v.length_m, 4)
-        )
-        k = np.hypot(kx[None, :], ky[:, None])
-        # The displacement is spread evenly over the draft, each layer at depth z radiating with
-        # exp(-k·z) (Michell 1898): factor (1 - exp(-k·T))/(k·T).
-        kt = k * v.draft_m
-        d_hat *= np.where(kt > 1e-9, -np.expm1(-kt) / np.maximum(kt, 1e-9), 1.0)
-        w = u * kx[None, :] + 1j * mu
-        zeta_hat = -d_hat * w * w / (g * k - w * w)
-        # Samples sit at xi0 + j·h: shift the phase to the grid origin; 1/h² turns the
-        # continuous transform into grid values.
-        phase = np.exp(1j * (kx[None, :] * self.origin[0] + ky[:, None] * self.origin[1]))
-        spectrum = zeta_hat * phase / (h * h)
-        # Height and both slopes in one single-precision transform of the three spectra: the
-        # field's own accuracy (linear theory, grid interpolation) is far coarser than float32,
-        # and at 2048² this is 6x faster than three double-precision transforms (a scene with
-        # three moving vessels spent 5.7 s here).
-        stacked = np.stack([spectrum, 1j * kx[None, :] * spectrum, 1j * ky[:, None] * spectrum])
-        height, sx, sy = sfft.ifft2(stacked.astype(np.complex64), workers=-1).real
-        window = self._window(nx, ny, h)
-        slope = np.hypot(sx, sy) * window
-        return (height * window).astype(np.float32), slope.astype(np.float32)
-
-    def _window(self, nx: int, ny: int, h: float) -> np.ndarray:
-        """1 inside the wake region, smooth to 0 ahead of the bow (beyond one transverse
-        wavelength) and over the last fifth of the wake length."""
-        xi = self.origin[0] + np.arange(nx) * h
-        bow = 0.5 * self.vessel.length_m
-        ahead = _smoothstep((bow + self.wavelength_m - xi) / self.wavelength_m)
-        taper = 0.2 * self.length_behind_m
-        behind = _smoothstep((xi + self.length_behind_m) / taper)
-        return np.broadcast_to((ahead * behind)[None, :], (ny, nx))
+        grid = wave_grid(vessel.speed_m_s, vessel.length_m, vessel.beam_m, vessel.draft_m, gravity)
+        self.wavelength_m = grid.wavelength_m
+        self.length_behind_m = grid.length_behind_m
+        self.ahead_m = grid.ahead_m
+        self.spacing_m = grid.spacing_m
+        self.origin = grid.origin
+        self.shape = grid.height.shape
+        self._height, self._slope = grid.height, grid.slope
+        self._breaking_box = grid.breaking_box
 
     def _sample(self, grid: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         xi, eta = self.vessel.to_vessel_frame(x, y)
@@ -301,7 +170,7 @@ class ShipWaves:
         """Foam fraction (0–1) of breaking ship waves: a smoothstep of the slope from
         ``0.7·BREAKING_SLOPE`` to :data:`BREAKING_SLOPE`."""
         s = self.slope(x, y)
-        return _smoothstep((s - 0.7 * BREAKING_SLOPE) / (0.3 * BREAKING_SLOPE))
+        return smoothstep((s - 0.7 * BREAKING_SLOPE) / (0.3 * BREAKING_SLOPE))
 
     def turbulent_foam(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Foam fraction (0–1) of the turbulent wake behind the stern (module docstring)."""
@@ -315,7 +184,7 @@ class ShipWaves:
         across = np.clip(1.0 - (eta / half_width) ** 2, 0.0, 1.0) ** 2
         age = np.maximum(s, 0.0) / v.speed_m_s
         # Ramp in over a tenth of the beam at the stern so the band starts softly.
-        start = _smoothstep(s / (0.1 * v.beam_m))
+        start = smoothstep(s / (0.1 * v.beam_m))
         return start * across * np.exp(-age / wake_foam_decay_s(v))
 
     def foam(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -325,23 +194,6 @@ class ShipWaves:
         if not self.moving:
             return a
         return 1.0 - (1.0 - a) * (1.0 - self.breaking_foam(x, y))
-
-    @functools.cached_property
-    def _breaking_box(self) -> tuple[float, float, float, float] | None:
-        """``(xi_min, xi_max, eta_min, eta_max)`` (m, vessel frame) of the grid cells whose
-        slope can make breaking foam, or None if none can."""
-        steep = self._slope > 0.7 * BREAKING_SLOPE
-        if not np.any(steep):
-            return None
-        rows, cols = np.nonzero(steep)
-        h = self.spacing_m
-        xi0, eta0 = self.origin
-        return (
-            xi0 + (cols.min() - 1) * h,
-            xi0 + (cols.max() + 1) * h,
-            eta0 + (rows.min() - 1) * h,
-            eta0 + (rows.max() + 1) * h,
-        )
 
     def foam_region(self, x: np.ndarray, y: np.ndarray, margin_m: np.ndarray | float) -> np.ndarray:
         """True where a point (x, y) (m) lies within ``margin_m`` of a region that can hold this
@@ -405,11 +257,6 @@ class ShipWaves:
         return out
 
 
-def _smoothstep(t: np.ndarray) -> np.ndarray:
-    t = np.clip(t, 0.0, 1.0)
-    return t * t * (3.0 - 2.0 * t)
-
-
 class WakeField:
     """The waves and foam of several moving vessels, to be added to the sea surface.
 
@@ -420,7 +267,7 @@ class WakeField:
 
     def __init__(self, vessels: Sequence[MovingVessel], gravity: float = GRAVITY) -> None:
         self.vessels = list(vessels)
-        self.waves = [_ship_waves(v, gravity) for v in self.vessels]
+        self.waves = [ShipWaves(v, gravity) for v in self.vessels]
 
     def height(
         self, x: np.ndarray, y: np.ndarray, spacing_m: np.ndarray | float | None = None
@@ -467,11 +314,6 @@ class WakeField:
         for waves in self.waves:
             clear *= 1.0 - waves.foam_averaged(x, y, azimuth_rad, radial_m, tangential_m)
         return 1.0 - clear
-
-
-@functools.lru_cache(maxsize=4)  # a few vessels' grids (up to 32 MB each)
-def _ship_waves(vessel: MovingVessel, gravity: float) -> ShipWaves:
-    return ShipWaves(vessel, gravity)
 
 
 def wake_height(vessels: Sequence[MovingVessel], x: np.ndarray, y: np.ndarray) -> np.ndarray:

@@ -151,8 +151,8 @@ def render_radiance(
 
 def render_clean(loaded: LoadedScene, spp: int, seed: int, albedo: float, g: float) -> np.ndarray:
     """Haze-free radiance: the scene's surfaces, sun and sky without the haze box, so the clean
-    image of ``reference`` and ``asm`` is the same whatever the haze settings (``albedo`` and ``g`` are
-    kept for callers; the medium is emptied too)."""
+    image of ``reference`` and ``asm`` is the same whatever the haze settings (``albedo`` and
+    ``g`` are kept for callers; the medium is emptied too)."""
     loaded.set_haze(0.0, albedo, g)
     return render_radiance(loaded, spp, render_seed(seed, RenderPass.CLEAN), clean=True)
 
