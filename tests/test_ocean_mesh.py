@@ -9,8 +9,10 @@ import pytest
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from seahaze.camera import Camera
 from seahaze.ocean import (
     FlatSurface,
+    FoamField,
     OceanParams,
     build_sea_mesh,
     build_sea_mesh_data,
@@ -18,7 +20,12 @@ from seahaze.ocean import (
     make_surface,
     ocean_params_for_beaufort,
 )
-from seahaze.ocean.mesh import DEFAULT_RADIUS_M, QUALITY_PRESETS
+from seahaze.ocean.mesh import (
+    DEFAULT_RADIUS_M,
+    QUALITY_PRESETS,
+    VIEW_MARGIN_DEG,
+    VIEW_TAPER_DEG,
+)
 
 WIDTH, HEIGHT_PX, HFOV_DEG = 160, 90, 60.0
 PIXEL_ANGLE = math.radians(HFOV_DEG) / WIDTH  # 0.375°, the smaller of the two pixel angles
@@ -150,3 +157,46 @@ def test_fade_and_vertex_normals() -> None:
 def test_flat_sea_mesh_is_planar() -> None:
     vertices, _ = build_sea_mesh(FlatSurface(), camera_height_m=2.0, quality="low")
     assert np.all(vertices[:, 2] == 0.0)
+
+
+@pytest.mark.parametrize("pitch_deg", [0.0, -2.0, -30.0, 15.0])
+def test_view_half_width_bounds_every_pixel_ray(pitch_deg: float) -> None:
+    """The camera's view half-width is the largest azimuth of its rays: every pixel-centre ray
+    lies within it, a border ray reaches it, and at zero pitch it is half the horizontal field
+    of view exactly (the pinhole's edge rays all have azimuth ``atan(tan(fov/2))``)."""
+    camera = Camera(15.0, HFOV_DEG, pitch_deg, 40.0, WIDTH, HEIGHT_PX)
+    half = camera.view_azimuth_half_width()
+    d = camera.pixel_center_directions().reshape(-1, 3)
+    off = np.abs(np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) - math.radians(40.0)))))
+    assert off.max() <= half + 1e-9
+    assert off.max() > half - math.radians(1.0)
+    if pitch_deg == 0.0:
+        assert half == pytest.approx(math.radians(HFOV_DEG / 2.0), abs=1e-12)
+
+
+def test_a_view_holding_the_nadir_sees_every_azimuth() -> None:
+    assert Camera(15.0, HFOV_DEG, -80.0, 0.0, WIDTH, HEIGHT_PX).view_azimuth_half_width() == (
+        pytest.approx(math.pi)
+    )
+
+
+def test_the_sea_outside_the_view_is_flat_with_the_mean_whitecaps() -> None:
+    """With a view, the vertices the camera can see are the same as without one (positions,
+    foam), and the sea beyond the view's margins is flat and carries the mean coverage."""
+    surface = make_surface(ocean_params_for_beaufort(6, choppiness=1.0, seed=5))
+    foam = FoamField(surface, 12.0)
+    heading = math.radians(30.0)
+    args = dict(camera_xy=(10.0, 20.0), camera_height_m=15.0, quality="low", foam=foam)
+    full = build_sea_mesh_data(surface, **args)
+    viewed = build_sea_mesh_data(surface, **args, view=(heading, math.radians(35.0)))
+    n_theta = full.n_theta
+    azimuth = np.concatenate([[0.0], np.tile(np.arange(n_theta) * 2 * math.pi / n_theta, 195)])
+    off = np.degrees(np.abs(np.angle(np.exp(1j * (azimuth - heading)))))
+    inside = off <= 35.0 + VIEW_MARGIN_DEG
+    outside = off >= 35.0 + VIEW_MARGIN_DEG + VIEW_TAPER_DEG
+    assert inside.sum() > 0.2 * inside.size and outside.sum() > 0.5 * outside.size
+    np.testing.assert_array_equal(viewed.vertices[inside], full.vertices[inside])
+    np.testing.assert_array_equal(viewed.foam[inside], full.foam[inside])
+    assert np.all(viewed.vertices[outside, 2] == 0.0)
+    np.testing.assert_allclose(viewed.foam[outside], foam.mean_fraction, rtol=1e-6)
+    assert np.abs(full.vertices[outside, 2]).max() > 0.5  # the full mesh had waves there

@@ -87,3 +87,24 @@ class Camera:
         """Elevation angle (deg) of every pixel-centre ray; negative rays look down at the sea."""
         d = self.pixel_center_directions()
         return np.degrees(np.arcsin(np.clip(d[..., 2], -1.0, 1.0)))
+
+    def view_azimuth_half_width(self, samples_per_edge: int = 32) -> float:
+        """Largest horizontal angle (rad) between the camera heading and any ray of the image,
+        from rays along the image border; ``pi`` when the view holds the nadir or the zenith
+        (every azimuth is then seen). Meshes use it to spend detail only where it is seen."""
+        t = np.linspace(0.0, 1.0, samples_per_edge)
+        u = np.concatenate([t, t, np.zeros_like(t), np.ones_like(t)]) * self.width
+        v = np.concatenate([np.zeros_like(t), np.ones_like(t), t, t]) * self.height
+        d = self.ray_directions(u, v)
+        forward, right, up = self.basis()
+        for pole in (np.array([0.0, 0.0, -1.0]), np.array([0.0, 0.0, 1.0])):
+            depth = pole @ forward
+            if depth > 0.0:
+                x = (pole @ right) / depth / self.tan_half_fov_x
+                y = (pole @ up) / depth / self.tan_half_fov_y
+                if abs(x) <= 1.0 and abs(y) <= 1.0:
+                    return math.pi
+        heading = math.radians(self.heading_deg)
+        azimuth = np.arctan2(d[:, 1], d[:, 0]) - heading
+        return float(np.max(np.abs(np.angle(np.exp(1j * azimuth)))))
+

@@ -191,7 +191,8 @@ def build_sea(
     at the finest spacing) and a far lobe (all slopes, the flat far sea):
     :func:`seahaze.ocean.mesh_roughness`. Foam: ``FoamField`` on the breaking crests, each
     vertex holding the whitecaps of its cell (none on a flat sea or with
-    ``sea.whitecaps: false``), plus the wakes' foam.
+    ``sea.whitecaps: false``), plus the wakes' foam. Waves, whitecaps and wakes are computed
+    only where the camera can see them (``view`` of :func:`seahaze.ocean.build_sea_mesh_data`).
     """
     params = ocean_params(spec)
     surface = ocean.make_surface(params) if surface is None else surface
@@ -205,6 +206,7 @@ def build_sea(
         quality=spec.sea.quality,
         foam=foam,
         wakes=wakes,
+        view=(math.radians(camera.heading_deg), camera.view_azimuth_half_width()),
     )
     attributes: dict[str, np.ndarray] = {}
     if mesh.foam is not None and mesh.foam_reflectance is not None and mesh.foam.max() > 0.0:

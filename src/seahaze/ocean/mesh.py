@@ -47,6 +47,17 @@ Foam and wakes (optional)
     ``1 - (1 - f_sea)(1 - f_wake)``; wake foam is fresh (reflectance 0.55), its thinning with
     age being in its fraction.
 
+Detail where it is seen (optional)
+    Given the camera's view (its heading and the largest horizontal angle of its rays,
+    :meth:`~seahaze.camera.Camera.view_azimuth_half_width`), only the vertices within that angle
+    plus :data:`VIEW_MARGIN_DEG` get the waves, whitecaps and wakes; over the next
+    :data:`VIEW_TAPER_DEG` the displacement and wake heights taper to zero, and beyond, the sea
+    behind and beside the camera is flat with the mean whitecap coverage ``W``. The camera never
+    sees it directly (the margin covers the horizontal drift of the choppy displacement, at most
+    about ``Hs``, a degree at 50 m); it only shows in rays reflected off hulls back past the
+    camera, where its mean brightness is what matters. On a 60° view this skips two thirds of the
+    per-vertex work; the seen vertices are computed exactly as without a view.
+
 Horizon
     A plane's horizon is at infinity; a disc of radius ``R`` leaves the rays between the
     horizon and the depression ``atan(h/R)`` uncovered (camera height ``h``). With ``n_theta``
@@ -94,6 +105,11 @@ FADE_RATIO = 2.0
 MIN_FAR_RINGS = 8
 MIN_NEAR_SCALE_M = 0.5
 
+VIEW_MARGIN_DEG = 10.0
+"""Full detail this far (deg of azimuth) beyond the widest ray of the view."""
+VIEW_TAPER_DEG = 10.0
+"""Beyond the margin, displacement and wake heights taper to zero over this many degrees."""
+
 
 @dataclass(frozen=True)
 class SeaMesh:
@@ -111,6 +127,9 @@ class SeaMesh:
             built without a foam field and without wakes.
         foam_reflectance: ``(N,)`` float32 visible reflectance of that foam (Lambertian albedo,
             0–1), or ``None`` with ``foam``.
+        detail: ``(N,)`` weight (0–1) of the waves and wakes at every vertex, 1 inside the
+            camera's view (module docstring), or ``None`` when the mesh was built without a
+            view (full detail everywhere).
     """
 
     vertices: np.ndarray
@@ -123,6 +142,7 @@ class SeaMesh:
     fade_end_m: float
     foam: np.ndarray | None = None
     foam_reflectance: np.ndarray | None = None
+    detail: np.ndarray | None = None
 
     @property
     def radius_m(self) -> float:
@@ -139,7 +159,8 @@ class SeaMesh:
     def vertex_fade(self) -> np.ndarray:
         """``(N,)`` displacement fade weight of every vertex at its rest radius."""
         r = np.concatenate([[0.0], np.repeat(self.ring_radii_m[1:], self.n_theta)])
-        return displacement_fade(r, self.fade_start_m, self.fade_end_m)
+        fade = displacement_fade(r, self.fade_start_m, self.fade_end_m)
+        return fade if self.detail is None else fade * self.detail
 
     def fade_weight(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Displacement weight at world positions (x, y), e.g. to scale a floating object's
@@ -287,6 +308,7 @@ def build_sea_mesh_data(
     pixel_angle_rad: float | None = None,
     foam: FoamField | None = None,
     wakes: WakeField | None = None,
+    view: tuple[float, float] | None = None,
 ) -> SeaMesh:
     """Build the polar sea mesh around ``camera_xy`` (see the module docstring).
 
@@ -301,6 +323,8 @@ def build_sea_mesh_data(
             fills ``SeaMesh.foam``.
         wakes: ship waves and foam wakes of moving vessels
             (:class:`~seahaze.ocean.wake.WakeField`), if any.
+        view: ``(heading, half_width)`` (rad) of the camera at ``camera_xy``: waves, whitecaps
+            and wakes only where they can be seen (module docstring); None: everywhere.
     """
     if quality not in QUALITY_PRESETS:
         raise ValueError(f"quality must be one of {sorted(QUALITY_PRESETS)}, got {quality!r}")
@@ -333,19 +357,24 @@ def build_sea_mesh_data(
     spacing = _vertex_spacing(radii, n_theta)
     radial, tangential = _footprints(radii, n_theta)
     azimuth = np.concatenate([[0.0], np.tile(theta, len(radii) - 1)])
-    foam_values, foam_albedo = _vertex_foam(
-        surface, foam, x, y, azimuth, radial, tangential, spacing
-    )
-    displaced = r < fade_end
-    if np.any(displaced):
-        weight = displacement_fade(r[displaced], fade_start, fade_end)
+    detail = view_detail(azimuth, view)
+    seen = slice(None) if detail is None else np.nonzero(detail > 0.0)[0]
+    strength = 1.0 if detail is None else detail[seen]
+    foam_values, foam_albedo = _unseen_foam(foam, x.size)
+    cells = (x[seen], y[seen], azimuth[seen], radial[seen], tangential[seen])
+    foam_values[seen], foam_albedo[seen] = _vertex_foam(surface, foam, *cells, spacing[seen])
+    weight = displacement_fade(r, fade_start, fade_end) * (1.0 if detail is None else detail)
+    displaced = np.nonzero(weight > 0.0)[0]
+    if displaced.size:
+        w = weight[displaced]
         dx, dy, dz = _displace(surface, x[displaced], y[displaced], spacing[displaced])
-        x[displaced] += weight * dx
-        y[displaced] += weight * dy
-        z[displaced] = weight * dz
+        x[displaced] += w * dx
+        y[displaced] += w * dy
+        z[displaced] = w * dz
     if wakes is not None:
-        z += wakes.height(x, y, spacing)
-        wake_foam = wakes.foam_averaged(x, y, azimuth, radial, tangential)
+        z[seen] += strength * wakes.height(x[seen], y[seen], spacing[seen])
+        wake_foam = np.zeros_like(x)
+        wake_foam[seen] = wakes.foam_averaged(x[seen], y[seen], *cells[2:])
         # Where both overlap the wake's fresh foam lies on top of the whitecap.
         foam_albedo = foam_albedo * (1.0 - wake_foam) + wake_foam * FRESH_FOAM_REFLECTANCE
         foam_values = 1.0 - (1.0 - foam_values) * (1.0 - wake_foam)
@@ -368,7 +397,34 @@ def build_sea_mesh_data(
         foam_reflectance=None
         if foam is None and wakes is None
         else np.clip(reflectance, 0.0, 1.0).astype(np.float32),
+        detail=detail,
     )
+
+
+def view_detail(azimuth_rad: np.ndarray, view: tuple[float, float] | None) -> np.ndarray | None:
+    """Weight (0–1) of the waves at vertices of azimuth ``azimuth_rad`` around the camera, for
+    a view ``(heading, half_width)`` (rad): 1 within the half-width plus
+    :data:`VIEW_MARGIN_DEG`, a smoothstep down to 0 over :data:`VIEW_TAPER_DEG`; None (all 1)
+    without a view or when the view with its margins takes in every azimuth."""
+    if view is None:
+        return None
+    heading, half_width = view
+    full = half_width + math.radians(VIEW_MARGIN_DEG)
+    taper = math.radians(VIEW_TAPER_DEG)
+    if full + taper >= math.pi:
+        return None
+    off = np.abs(np.angle(np.exp(1j * (np.asarray(azimuth_rad) - heading))))
+    t = np.clip((full + taper - off) / taper, 0.0, 1.0)
+    detail = t * t * (3.0 - 2.0 * t)
+    detail[0] = 1.0  # the centre vertex, under the camera
+    return detail
+
+
+def _unseen_foam(foam: FoamField | None, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Foam fraction and foam albedo of vertices nobody sees: the whitecaps' mean coverage."""
+    if foam is None:
+        return np.zeros(n), np.zeros(n)
+    return np.full(n, foam.mean_fraction), np.full(n, foam.albedo)
 
 
 FOAM_FEATURE_PEAK_WAVELENGTHS = 1.0 / 16.0
