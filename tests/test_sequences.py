@@ -649,6 +649,53 @@ def test_animated_preview_has_one_frame_per_frame(reference, tmp_path):
         assert gif.info["loop"] == 0
 
 
+def test_mp4_preview_decodes_to_the_frames_contact_sheets(reference, tmp_path):
+    imageio = pytest.importorskip("imageio.v2")
+    pytest.importorskip("imageio_ffmpeg")
+    from seahaze.preview import animation
+
+    out = tmp_path / "seq.mp4"
+    args = ["preview", str(reference), "--sequence", "tinyseq", "--tile-width", "64"]
+    args += ["--columns", "2", "--levels", "clean,v1000"]
+    assert main([*args, "--out", str(out)]) == 0
+    sheets, fps = animation(reference, "tinyseq", ["clean", "v1000"], 2, 64)
+    reader = imageio.get_reader(out, format="FFMPEG")
+    try:
+        assert reader.get_meta_data()["fps"] == pytest.approx(fps)
+        frames = [np.asarray(frame, np.float64) for frame in reader]
+    finally:
+        reader.close()
+    assert len(frames) == 3 and all(f.shape == (36, 128, 3) for f in frames)
+    # Luma (ITU-R 601, as PIL's "L") is coded at full resolution: within 3 levels of 255 on
+    # average at CRF 18, and every frame nearest to its own sheet (the vessels move). The
+    # chroma is halved both ways (4:2:0), which blurs a 1-spp render's colour noise but keeps
+    # each channel's mean (a swapped or mis-ranged channel would shift it by tens of levels).
+    luma = [np.asarray(Image.fromarray(f.astype(np.uint8)).convert("L"), float) for f in frames]
+    sheet_luma = [np.asarray(sheet.convert("L"), np.float64) for sheet in sheets]
+    errors = np.array([[np.abs(f - s).mean() for s in sheet_luma] for f in luma])
+    assert errors.diagonal().max() < 3.0, errors
+    assert all(row[i] < 0.5 * np.delete(row, i).min() for i, row in enumerate(errors)), errors
+    for frame, sheet in zip(frames, sheets, strict=True):
+        bias = (frame - np.asarray(sheet, np.float64)).mean(axis=(0, 1))
+        assert np.abs(bias).max() < 3.0, bias
+    # One encoder thread: the same sheets give the same bytes.
+    again = tmp_path / "again.mp4"
+    assert main([*args, "--out", str(again)]) == 0
+    assert again.read_bytes() == out.read_bytes()
+    assert main([*args, "--out", str(tmp_path / "seq.avi")]) == 2
+
+
+def test_mp4_preview_without_the_video_extra_is_a_one_line_error(
+    reference, tmp_path, monkeypatch, capsys
+):
+    monkeypatch.setitem(sys.modules, "imageio_ffmpeg", None)  # import raises ImportError
+    out = tmp_path / "seq.mp4"
+    assert main(["preview", str(reference), "--sequence", "tinyseq", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "pip install 'seahaze[video]'" in err, err
+    assert not out.exists()
+
+
 def test_a_sequences_frames_share_one_split_so_splits_stay_scene_disjoint() -> None:
     """With --split, every frame of a sequence lands in its sequence's split (frames of one
     sequence in train and test would leak the same vessels and sea into both)."""
