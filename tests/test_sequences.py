@@ -7,7 +7,9 @@ against the surface model at each frame's time. Then one tiny sequence (3 frames
 ``reference`` fixture) and checked independently: each track's box moves by less than its own
 size between frames unless occluded, lies inside the box re-projected from the vessel's
 recorded pose, and matches the MOTChallenge and COCO files; a run killed after its first frame
-and resumed must end byte-identical to it; the animated preview has one frame per frame.
+and resumed must end byte-identical to it; the animated preview has one frame per frame (the
+MP4 one decoded back against the contact sheets); frames that reuse their vessel models
+build the same bytes as frames that build them afresh.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from seahaze.motion import MotionError, first_conflict, frame_times, plan_course
 from seahaze.sceneio import SceneFileError, load_scene, parse_scene_text
 from seahaze.spec import SceneSpec, with_overrides
 from seahaze.world import (
+    build_geometry,
     build_vessels,
     frame_camera,
     frame_layout,
@@ -374,6 +377,49 @@ def test_vessels_heave_pitch_and_roll_with_the_surface_at_each_frame_time():
         heaves.append([v.waterline_z for v in placed])
     # The sea moves: the heave under each vessel changes between frames.
     assert np.ptp(np.array(heaves), axis=0).min() > 1e-3
+
+
+@pytest.mark.parametrize("which", ["explicit", "sampled"])
+def test_frames_reuse_their_vessel_models_and_build_the_same_bytes(which, monkeypatch):
+    from seahaze.vessels import library
+
+    spec = _spec() if which == "explicit" else _sampled("crossing", 4, count=4)
+    spec = with_overrides(spec, frames=3).model_copy(
+        update={"sea": _spec().sea}  # the low-density sea: the vessels are what is measured
+    )
+    built = []
+    build = library.build_vessel
+
+    def counting(kind, length_m, rng):
+        built.append(kind)
+        return build(kind, length_m, rng)
+
+    monkeypatch.setattr(library, "build_vessel", counting)
+
+    def frames() -> list:
+        out = []
+        for frame in range(3):
+            camera = frame_camera(spec, frame)
+            geometry = build_geometry(spec, camera, frame)
+            fields = [
+                (v.kind, v.length_m, v.beam_m, v.air_draft_m, v.hull_draft_m, v.bounds_m)
+                for v in geometry.vessels
+            ]
+            out.append((geometry.digest(), fields))
+        return out
+
+    library.clear_model_cache()
+    monkeypatch.setattr(library, "MODEL_CACHE_SIZE", 0)  # no reuse: each frame builds afresh
+    cold = frames()
+    n_vessels = len(cold[0][1])
+    assert n_vessels >= 2 and len(built) == 3 * n_vessels
+    monkeypatch.undo()
+    monkeypatch.setattr(library, "build_vessel", counting)
+    built.clear()
+    warm = frames()
+    assert warm == cold  # every mesh, material and dimension bit for bit
+    assert len(built) == n_vessels  # the first frame built them, the others reused them
+    assert len({digest for digest, _ in warm}) == 3  # the frames do differ (motion, sea)
 
 
 def test_the_sea_advances_by_its_dispersion_relation():

@@ -416,7 +416,8 @@ def build_vessels(
     With ``vessels.follow_slope`` each hull also pitches and rolls to the sea slope between its
     bow and stern and between its sides (finite differences of the surface height), so a ship
     longer than the waves bridges them instead of following every ripple. ``frame``: the
-    vessels where their courses (:mod:`seahaze.motion`) put them at that frame's time.
+    vessels where their courses (:mod:`seahaze.motion`) put them at that frame's time; the
+    models are built once per sequence (:func:`seahaze.vessels.build_vessel_reused`).
     """
     user_models = load_user_meshes(spec)
     rng = stream_rng(spec.render.seed, Stream.VESSELS)
@@ -426,7 +427,7 @@ def build_vessels(
         # Explicit vessels come first in the layout, so index i < len(placed) is placed[i].
         model = user_models.get(index)
         if model is None:
-            model = vessels.build_vessel(placement.kind, placement.length_m, rng)
+            model = vessels.build_vessel_reused(placement.kind, placement.length_m, rng)
         parts = vessels.place_on_sea(
             model, placement, surface.height, follow_slope=spec.vessels.follow_slope
         )
