@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Install everything seahaze needs on a fresh Debian 12 machine, from the project's own files:
 #   system: libLLVM 19 for Mitsuba's llvm variants (Debian's default LLVM 15 aborts inside drjit);
-#   python: a virtual environment in .venv with seahaze and its test tools (pyproject.toml).
+#   python: a virtual environment in .venv with seahaze, its test tools and the MP4 preview's
+#   imageio-ffmpeg (pyproject.toml's test and video extras).
 # Safe to run again: it only installs what is missing. Called by `make render` and `make test`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -26,5 +27,6 @@ if [ ! -x .venv/bin/python ]; then
 fi
 echo "[bootstrap] installing seahaze and test tools into .venv"
 .venv/bin/python -m pip install -q --disable-pip-version-check --upgrade pip
-.venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test]'
+# The video extra too: the MP4 preview tests run (they are skipped without it).
+.venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test,video]'
 touch .venv/.seahaze-installed

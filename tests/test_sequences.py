@@ -7,7 +7,9 @@ against the surface model at each frame's time. Then one tiny sequence (3 frames
 ``reference`` fixture) and checked independently: each track's box moves by less than its own
 size between frames unless occluded, lies inside the box re-projected from the vessel's
 recorded pose, and matches the MOTChallenge and COCO files; a run killed after its first frame
-and resumed must end byte-identical to it; the animated preview has one frame per frame.
+and resumed must end byte-identical to it; the animated preview has one frame per frame (the
+MP4 one decoded back against the contact sheets); frames that reuse their vessel models
+build the same bytes as frames that build them afresh.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from seahaze.motion import MotionError, first_conflict, frame_times, plan_course
 from seahaze.sceneio import SceneFileError, load_scene, parse_scene_text
 from seahaze.spec import SceneSpec, with_overrides
 from seahaze.world import (
+    build_geometry,
     build_vessels,
     frame_camera,
     frame_layout,
@@ -376,6 +379,49 @@ def test_vessels_heave_pitch_and_roll_with_the_surface_at_each_frame_time():
     assert np.ptp(np.array(heaves), axis=0).min() > 1e-3
 
 
+@pytest.mark.parametrize("which", ["explicit", "sampled"])
+def test_frames_reuse_their_vessel_models_and_build_the_same_bytes(which, monkeypatch):
+    from seahaze.vessels import library
+
+    spec = _spec() if which == "explicit" else _sampled("crossing", 4, count=4)
+    spec = with_overrides(spec, frames=3).model_copy(
+        update={"sea": _spec().sea}  # the low-density sea: the vessels are what is measured
+    )
+    built = []
+    build = library.build_vessel
+
+    def counting(kind, length_m, rng):
+        built.append(kind)
+        return build(kind, length_m, rng)
+
+    monkeypatch.setattr(library, "build_vessel", counting)
+
+    def frames() -> list:
+        out = []
+        for frame in range(3):
+            camera = frame_camera(spec, frame)
+            geometry = build_geometry(spec, camera, frame)
+            fields = [
+                (v.kind, v.length_m, v.beam_m, v.air_draft_m, v.hull_draft_m, v.bounds_m)
+                for v in geometry.vessels
+            ]
+            out.append((geometry.digest(), fields))
+        return out
+
+    library.clear_model_cache()
+    monkeypatch.setattr(library, "MODEL_CACHE_SIZE", 0)  # no reuse: each frame builds afresh
+    cold = frames()
+    n_vessels = len(cold[0][1])
+    assert n_vessels >= 2 and len(built) == 3 * n_vessels
+    monkeypatch.undo()
+    monkeypatch.setattr(library, "build_vessel", counting)
+    built.clear()
+    warm = frames()
+    assert warm == cold  # every mesh, material and dimension bit for bit
+    assert len(built) == n_vessels  # the first frame built them, the others reused them
+    assert len({digest for digest, _ in warm}) == 3  # the frames do differ (motion, sea)
+
+
 def test_the_sea_advances_by_its_dispersion_relation():
     spec = with_overrides(_spec(), frames=11, fps=10)
     s0 = ocean.make_surface(ocean_params(spec, 0.0))
@@ -647,6 +693,53 @@ def test_animated_preview_has_one_frame_per_frame(reference, tmp_path):
         assert gif.size == (128, 36)
         assert gif.info["duration"] == 500
         assert gif.info["loop"] == 0
+
+
+def test_mp4_preview_decodes_to_the_frames_contact_sheets(reference, tmp_path):
+    imageio = pytest.importorskip("imageio.v2")
+    pytest.importorskip("imageio_ffmpeg")
+    from seahaze.preview import animation
+
+    out = tmp_path / "seq.mp4"
+    args = ["preview", str(reference), "--sequence", "tinyseq", "--tile-width", "64"]
+    args += ["--columns", "2", "--levels", "clean,v1000"]
+    assert main([*args, "--out", str(out)]) == 0
+    sheets, fps = animation(reference, "tinyseq", ["clean", "v1000"], 2, 64)
+    reader = imageio.get_reader(out, format="FFMPEG")
+    try:
+        assert reader.get_meta_data()["fps"] == pytest.approx(fps)
+        frames = [np.asarray(frame, np.float64) for frame in reader]
+    finally:
+        reader.close()
+    assert len(frames) == 3 and all(f.shape == (36, 128, 3) for f in frames)
+    # Luma (ITU-R 601, as PIL's "L") is coded at full resolution: within 3 levels of 255 on
+    # average at CRF 18, and every frame nearest to its own sheet (the vessels move). The
+    # chroma is halved both ways (4:2:0), which blurs a 1-spp render's colour noise but keeps
+    # each channel's mean (a swapped or mis-ranged channel would shift it by tens of levels).
+    luma = [np.asarray(Image.fromarray(f.astype(np.uint8)).convert("L"), float) for f in frames]
+    sheet_luma = [np.asarray(sheet.convert("L"), np.float64) for sheet in sheets]
+    errors = np.array([[np.abs(f - s).mean() for s in sheet_luma] for f in luma])
+    assert errors.diagonal().max() < 3.0, errors
+    assert all(row[i] < 0.5 * np.delete(row, i).min() for i, row in enumerate(errors)), errors
+    for frame, sheet in zip(frames, sheets, strict=True):
+        bias = (frame - np.asarray(sheet, np.float64)).mean(axis=(0, 1))
+        assert np.abs(bias).max() < 3.0, bias
+    # One encoder thread: the same sheets give the same bytes.
+    again = tmp_path / "again.mp4"
+    assert main([*args, "--out", str(again)]) == 0
+    assert again.read_bytes() == out.read_bytes()
+    assert main([*args, "--out", str(tmp_path / "seq.avi")]) == 2
+
+
+def test_mp4_preview_without_the_video_extra_is_a_one_line_error(
+    reference, tmp_path, monkeypatch, capsys
+):
+    monkeypatch.setitem(sys.modules, "imageio_ffmpeg", None)  # import raises ImportError
+    out = tmp_path / "seq.mp4"
+    assert main(["preview", str(reference), "--sequence", "tinyseq", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "pip install 'seahaze[video]'" in err, err
+    assert not out.exists()
 
 
 def test_a_sequences_frames_share_one_split_so_splits_stay_scene_disjoint() -> None:

@@ -2,7 +2,9 @@
 
 World frame: Z up, metres, sea level at z = 0, camera at ``(0, 0, height)`` (a ship platform's
 camera moves: ``(x_m, y_m, height)``). Heading is measured
-counter-clockwise from +x, pitch upward from the horizontal. Image coordinates ``(u, v)`` are in
+counter-clockwise from +x, pitch upward from the horizontal, roll about the optical axis
+positive clockwise as seen from behind the camera (its right side down: the horizon rises to
+the right of the image with slope ``tan(roll)``). Image coordinates ``(u, v)`` are in
 pixels with the origin at the top-left corner of the top-left pixel, ``u`` to the right and
 ``v`` down; pixel ``(i, j)`` covers ``[i, i+1) x [j, j+1)``.
 """
@@ -10,7 +12,7 @@ pixels with the origin at the top-left corner of the top-left pixel, ``u`` to th
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -30,12 +32,22 @@ class Camera:
     x_m: float = 0.0
     """Horizontal position (m) of the camera: 0 but on a moving platform (a sequence's ship)."""
     y_m: float = 0.0
+    roll_deg: float = 0.0
+    """Roll about the optical axis (deg), positive right side down (module docstring)."""
 
     @classmethod
     def from_spec(cls, spec: CameraSpec) -> Camera:
         """The camera a scene spec describes."""
         width, height = spec.resolution
-        return cls(spec.height_m, spec.fov_deg, spec.pitch_deg, spec.heading_deg, width, height)
+        return cls(
+            spec.height_m,
+            spec.fov_deg,
+            spec.pitch_deg,
+            spec.heading_deg,
+            width,
+            height,
+            roll_deg=spec.roll_deg,
+        )
 
     @property
     def origin(self) -> np.ndarray:
@@ -43,12 +55,40 @@ class Camera:
         return np.array([self.x_m, self.y_m, self.height_m])
 
     def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Unit vectors ``(forward, right, up)`` of the camera in world coordinates."""
+        """Unit vectors ``(forward, right, up)`` of the camera in world coordinates.
+
+        Without roll ``right`` is horizontal; a roll turns ``right`` and ``up`` about
+        ``forward``, right side down for a positive roll (a right-handed turn about
+        ``forward`` in a frame whose ``y`` points left, as a ship's roll is port up).
+        """
         h, p = math.radians(self.heading_deg), math.radians(self.pitch_deg)
         forward = np.array([math.cos(p) * math.cos(h), math.cos(p) * math.sin(h), math.sin(p)])
         right = np.array([math.sin(h), -math.cos(h), 0.0])
         up = np.cross(right, forward)
-        return forward, right, up
+        if self.roll_deg == 0.0:
+            return forward, right, up  # exactly the unrolled basis: a level camera's bytes
+        r = math.radians(self.roll_deg)
+        return (
+            forward,
+            right * math.cos(r) - up * math.sin(r),
+            up * math.cos(r) + right * math.sin(r),
+        )
+
+    def pointing(self, forward: np.ndarray, up: np.ndarray) -> Camera:
+        """This camera turned so that its :meth:`basis` has ``forward`` and ``up`` (unit,
+        perpendicular world vectors): the heading, pitch and roll that give them.
+
+        Heading is ``atan2`` of ``forward`` (-180..180), so it may differ from this camera's
+        by a multiple of 360.
+        """
+        f = np.asarray(forward, float)
+        heading = math.degrees(math.atan2(f[1], f[0]))
+        pitch = math.degrees(math.asin(max(-1.0, min(1.0, float(f[2])))))
+        level = replace(self, heading_deg=heading, pitch_deg=pitch, roll_deg=0.0)
+        _, right0, up0 = level.basis()
+        u = np.asarray(up, float)
+        # up = up0 cos(roll) + right0 sin(roll) (see basis).
+        return replace(level, roll_deg=math.degrees(math.atan2(u @ right0, u @ up0)))
 
     @property
     def tan_half_fov_x(self) -> float:

@@ -108,6 +108,23 @@ class CameraSpec(_Spec):
         description="Image width and height in pixels (`--res WxH` overrides).",
         json_schema_extra=_unit("px"),
     )
+    roll_deg: float = Field(
+        0.0,
+        ge=-45.0,
+        le=45.0,
+        description="Roll about the optical axis; positive turns the camera clockwise as seen "
+        "from behind it (its right side down, like a ship's port-up roll), so the horizon "
+        "rises to the right of the image, its slope `tan(roll)`. Recorded only when not 0.",
+        json_schema_extra=_unit("deg"),
+    )
+
+    @model_serializer(mode="wrap")
+    def _omit_level(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # A level camera's recorded config and meta stay byte-identical to before roll existed.
+        data = handler(self)
+        if self.roll_deg == 0.0:
+            data.pop("roll_deg", None)
+        return data
 
 
 class SunSpec(_Spec):
@@ -612,7 +629,8 @@ _WindEnd = Annotated[float, Field(ge=0.0, le=40.0)]
 _HeightEnd = Annotated[float, Field(ge=0.5, le=1000.0)]
 _PitchEnd = Annotated[float, Field(ge=-60.0, le=30.0)]
 _FovEnd = Annotated[float, Field(gt=1.0, le=120.0)]
-CAMERA_VARIATION = ("camera_height_m", "camera_pitch_deg", "camera_fov_deg")
+_RollEnd = Annotated[float, Field(ge=-45.0, le=45.0)]
+CAMERA_VARIATION = ("camera_height_m", "camera_pitch_deg", "camera_fov_deg", "camera_roll_deg")
 """Variation ranges of the camera's perspective (issue 17), left out of a recorded config
 when unset so configs recorded before them stay byte-identical."""
 
@@ -666,6 +684,11 @@ class VariationSpec(_Spec):
     camera_fov_deg: tuple[_FovEnd, _FovEnd] | None = Field(
         None,
         description="Range `[low, high]` of `camera.fov_deg` (each end within 1..120, 1 excluded).",
+        json_schema_extra=_unit("deg"),
+    )
+    camera_roll_deg: tuple[_RollEnd, _RollEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `camera.roll_deg` (each end within -45..45).",
         json_schema_extra=_unit("deg"),
     )
     resample_sea: bool = Field(
@@ -727,9 +750,17 @@ class SequenceSpec(_Spec):
     platform: Literal["shore", "ship"] = Field(
         "shore",
         description="Camera platform: `shore`, a fixed mast; `ship`, a mast on an own ship "
-        "sailing at `own_speed_kn` and heaving and pitching with the sea (the camera is "
-        "roll-stabilised: its image stays level). Either way `camera.height_m` (5..60 m) is "
-        "the camera's height above the (own ship's) waterline.",
+        "sailing at `own_speed_kn` and heaving, pitching and rolling with the sea (see "
+        "`camera_mount`). Either way `camera.height_m` (5..60 m) is the camera's height above "
+        "the (own ship's) waterline.",
+    )
+    camera_mount: Literal["level", "rigid"] = Field(
+        "level",
+        description="How the camera sits on the own ship's mast (`ship` only). `level`: "
+        "roll-stabilised, the image keeps `camera.roll_deg` and the view's pitch follows the "
+        "ship's pitch and roll projected on the view direction. `rigid`: fixed to the hull, "
+        "the camera turns with the ship's whole attitude (its pitch and roll from the sea "
+        "under the hull), so the horizon tilts and sways with the ship's roll.",
     )
     own_speed_kn: float = Field(
         0.0,
@@ -763,7 +794,20 @@ class SequenceSpec(_Spec):
                 "own_speed_kn and own_heading_deg describe an own ship; allowed: platform ship, "
                 "or leave them out for a shore mast"
             )
+        if self.platform == "shore" and self.camera_mount != "level":
+            raise ValueError(
+                f"camera_mount {self.camera_mount} mounts the camera on an own ship; allowed: "
+                "platform ship, or camera_mount level for a shore mast"
+            )
         return self
+
+    @model_serializer(mode="wrap")
+    def _omit_level_mount(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # A level mount's recorded config stays byte-identical to before mounts existed.
+        data = handler(self)
+        if self.camera_mount == "level":
+            data.pop("camera_mount", None)
+        return data
 
     encounter: Literal["none", "crossing", "head_on", "overtaking", "random"] = Field(
         "none",

@@ -352,7 +352,9 @@ def frame_layout(
     user_models: dict[int, vessels.VesselModel] | None = None,
 ) -> tuple[list[vessels.Placement], list[float]]:
     """The vessels' placements and speeds (m/s) at ``frame`` of the scene's sequence (None:
-    the scene as written, a still)."""
+    the scene as written, a still); distances from ``camera``'s position, bearings from the
+    scene's ``camera.heading_deg`` (not a rigidly mounted camera's yaw on the swell)."""
+    camera = replace(camera, heading_deg=spec.camera.heading_deg)
     placements = layout_vessels(spec, camera, user_models)
     speeds = vessel_speeds(spec, placements)
     if frame is None or spec.sequence is None:
@@ -373,8 +375,10 @@ def frame_camera(spec: SceneSpec, frame: int | None = None) -> Camera:
     waterline at the surface height under midships, pitched and rolled to the slope over its
     length and beam (a long hull averages short waves, as the vessels' do); the mast carries the
     camera ``camera.height_m`` above the waterline, and the view's pitch gains the ship's
-    pitch and roll projected on the view direction. The camera is roll-stabilised: its image
-    stays level (the pinhole camera has no roll).
+    pitch and roll projected on the view direction. With ``sequence.camera_mount: level`` the
+    camera is roll-stabilised (it keeps ``camera.roll_deg``); with ``rigid`` it is fixed to the
+    hull instead: its spec angles hold with the hull level, the hull's rotation
+    (:func:`seahaze.vessels.hull_rotation`) turns its whole basis and tilts the mast.
     """
     camera = Camera.from_spec(spec.camera)
     own = motion.own_course(spec)
@@ -394,6 +398,11 @@ def frame_camera(spec: SceneSpec, frame: int | None = None) -> Camera:
     z = np.asarray(surface.height(points[:, 0], points[:, 1]), np.float64)
     pitch = math.atan((z[0] - z[1]) / length)
     roll = math.atan((z[2] - z[3]) / beam)
+    if spec.sequence.camera_mount == "rigid":
+        rot = vessels.hull_rotation(heading, pitch, roll)
+        forward, _, up = replace(camera, heading_deg=camera.heading_deg - heading).basis()
+        mx, my, mz = (np.array([x, y, z[4]]) + rot @ np.array([0.0, 0.0, camera.height_m])).tolist()
+        return replace(camera.pointing(rot @ forward, rot @ up), x_m=mx, y_m=my, height_m=mz)
     look = math.radians(camera.heading_deg - heading)
     view_pitch = camera.pitch_deg + math.degrees(pitch * math.cos(look) + roll * math.sin(look))
     return replace(
@@ -409,7 +418,8 @@ def build_vessels(
     With ``vessels.follow_slope`` each hull also pitches and rolls to the sea slope between its
     bow and stern and between its sides (finite differences of the surface height), so a ship
     longer than the waves bridges them instead of following every ripple. ``frame``: the
-    vessels where their courses (:mod:`seahaze.motion`) put them at that frame's time.
+    vessels where their courses (:mod:`seahaze.motion`) put them at that frame's time; the
+    models are built once per sequence (:func:`seahaze.vessels.build_vessel_reused`).
     """
     user_models = load_user_meshes(spec)
     rng = stream_rng(spec.render.seed, Stream.VESSELS)
@@ -419,7 +429,7 @@ def build_vessels(
         # Explicit vessels come first in the layout, so index i < len(placed) is placed[i].
         model = user_models.get(index)
         if model is None:
-            model = vessels.build_vessel(placement.kind, placement.length_m, rng)
+            model = vessels.build_vessel_reused(placement.kind, placement.length_m, rng)
         parts = vessels.place_on_sea(
             model, placement, surface.height, follow_slope=spec.vessels.follow_slope
         )

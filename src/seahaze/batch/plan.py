@@ -30,6 +30,7 @@ VARIED: dict[str, tuple[str, str]] = {
     "camera_height_m": ("camera", "height_m"),
     "camera_pitch_deg": ("camera", "pitch_deg"),
     "camera_fov_deg": ("camera", "fov_deg"),
+    "camera_roll_deg": ("camera", "roll_deg"),
 }
 """Each ``variation`` range and the spec field it sets; the order fixes each one's stream."""
 

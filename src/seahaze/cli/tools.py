@@ -48,7 +48,7 @@ def cmd_classes(args: argparse.Namespace) -> int:
 
 def cmd_preview(args: argparse.Namespace) -> int:
     """Write a contact sheet of one scene: clean and levels side by side, boxes drawn; with
-    ``--sequence``, an animated GIF of a sequence's frames."""
+    ``--sequence``, an animated GIF or MP4 of a sequence's frames."""
     from ..preview import PreviewError, contact_sheet
 
     root = Path(args.dataset)
@@ -74,12 +74,15 @@ def cmd_preview(args: argparse.Namespace) -> int:
 
 
 def _preview_sequence(args: argparse.Namespace, root: Path, levels: list[str] | None) -> int:
-    """``seahaze preview --sequence NAME``: every frame's contact sheet as an animated GIF."""
-    from ..preview import PreviewError, animation, save_gif
+    """``seahaze preview --sequence NAME``: every frame's contact sheet as an animated GIF or
+    an MP4, by the extension of ``--out``."""
+    from ..preview import ANIMATION_FORMATS, PreviewError, animation, save_gif, save_mp4
 
     out = Path(args.out) if args.out else root / f"{args.sequence}.gif"
-    if out.suffix.lower() != ".gif":
-        raise UsageError(f"--out {out}: an animated preview is a .gif file")
+    suffix = out.suffix.lower()
+    if suffix not in ANIMATION_FORMATS:
+        allowed = " or ".join(ANIMATION_FORMATS)
+        raise UsageError(f"--out {out}: an animated preview is a {allowed} file")
     try:
         sheets, fps = animation(
             root, args.sequence, levels, args.columns, args.tile_width, not args.no_boxes
@@ -88,7 +91,9 @@ def _preview_sequence(args: argparse.Namespace, root: Path, levels: list[str] | 
         raise UsageError(str(err)) from None
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
-        save_gif(sheets, out, fps)
+        (save_mp4 if suffix == ".mp4" else save_gif)(sheets, out, fps)
+    except PreviewError as err:
+        raise UsageError(str(err)) from None
     except OSError as err:
         raise UsageError(f"--out {out}: cannot write the animation ({err})") from None
     print(f"wrote {out} ({len(sheets)} frames at {fps:g} frames/s)")
@@ -125,7 +130,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     preview.add_argument(
         "--sequence",
         metavar="NAME",
-        help="animate every frame of sequence NAME into a GIF (default --out DIR/NAME.gif)",
+        help="animate every frame of sequence NAME into a GIF, or an MP4 with --out NAME.mp4 "
+        "(needs pip install 'seahaze[video]'; default --out DIR/NAME.gif)",
     )
     preview.add_argument(
         "--levels", metavar="L1,L2", help="levels to show, e.g. clean,v0300,v1000 (default: all)"

@@ -366,8 +366,9 @@ def sample_layout(
 
 
 # --------------------------------------------------------------------------- to world
-def _rotation(heading_deg: float, pitch_rad: float, roll_rad: float) -> np.ndarray:
-    """R = Rz(heading) · Ry(-pitch) · Rx(roll): bow-up pitch and port-up roll are positive."""
+def hull_rotation(heading_deg: float, pitch_rad: float, roll_rad: float) -> np.ndarray:
+    """The hull frame (x bow, y port, z up) in the world: R = Rz(heading) · Ry(-pitch) ·
+    Rx(roll), bow-up pitch and port-up roll positive (radians, heading in degrees)."""
     h = np.radians(heading_deg)
     ch, sh = np.cos(h), np.sin(h)
     cp, sp = np.cos(-pitch_rad), np.sin(-pitch_rad)
@@ -443,7 +444,7 @@ def vessel_to_world_matrix(
     """4×4 homogeneous transform from the vessel frame to the world (metres)."""
     z0, pitch, roll = vessel_attitude(model, placement, height_fn, slope_fn, follow_slope)
     matrix = np.eye(4)
-    matrix[:3, :3] = _rotation(placement.heading_deg, pitch, roll)
+    matrix[:3, :3] = hull_rotation(placement.heading_deg, pitch, roll)
     matrix[:3, 3] = (placement.x, placement.y, z0)
     return matrix
 

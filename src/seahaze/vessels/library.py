@@ -104,6 +104,7 @@ buoy              0           moored: no speed through the water (tidal current 
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -414,3 +415,37 @@ def build_vessel(kind: str, length_m: float | None, rng: np.random.Generator) ->
     model.draft_m = float(-lo[2])
     model.air_draft_m = float(hi[2])
     return model
+
+
+MODEL_CACHE_SIZE = 64
+"""Most procedural vessel models :func:`build_vessel_reused` keeps (least recently used
+dropped first): a few sequences' fleets at about 0.2 MB of vertices and faces each."""
+_MODEL_CACHE: OrderedDict[tuple[str, float | None, str], tuple[VesselModel, dict]] = OrderedDict()
+
+
+def build_vessel_reused(kind: str, length_m: float | None, rng: np.random.Generator) -> VesselModel:
+    """:func:`build_vessel`, reusing the model built before from the same inputs.
+
+    A model depends on the class, the length and the generator's state and nothing else (the
+    library code is fixed within a process), so those are the key; a hit also moves ``rng`` on
+    to the state the build left it in, so the vessels built after it draw what they would have.
+    The frames of a sequence build the same fleet (same seed, kinds and lengths), so every
+    frame after the first reuses its models. The model is shared: callers must not change it
+    (:func:`seahaze.vessels.place_on_sea` copies the vertices it moves).
+    """
+    key = (kind, length_m, repr(rng.bit_generator.state))
+    hit = _MODEL_CACHE.get(key)
+    if hit is not None:
+        _MODEL_CACHE.move_to_end(key)
+        rng.bit_generator.state = hit[1]
+        return hit[0]
+    model = build_vessel(kind, length_m, rng)
+    _MODEL_CACHE[key] = (model, rng.bit_generator.state)
+    while len(_MODEL_CACHE) > MODEL_CACHE_SIZE:
+        _MODEL_CACHE.popitem(last=False)
+    return model
+
+
+def clear_model_cache() -> None:
+    """Forget every model :func:`build_vessel_reused` kept."""
+    _MODEL_CACHE.clear()
