@@ -260,6 +260,8 @@ def test_a_rigid_ship_sequence_labels_reproject_through_the_rolled_camera(tmp_pa
         assert meta["camera"]["roll_deg"] == 12.0 and meta["sequence"]["camera_mount"] == "rigid"
         assert meta["camera"]["position_m"] == pytest.approx(camera.origin.tolist())
         assert meta["camera"]["pitch_used_deg"] == pytest.approx(camera.pitch_deg)
+        assert meta["camera"]["roll_used_deg"] == pytest.approx(camera.roll_deg)
+        assert meta["camera"]["heading_used_deg"] == pytest.approx(camera.heading_deg)
         for vessel in meta["vessels"]:
             if vessel["box_px"] is None:
                 continue

@@ -234,7 +234,12 @@ def sequence_meta(
         **meta,
         # A ship platform's camera moves, heaves and pitches: position_m is the frame's, and
         # the view's pitch is recorded beside the scene's.
-        "camera": {**meta["camera"], "pitch_used_deg": camera.pitch_deg},
+        "camera": {
+            **meta["camera"],
+            "pitch_used_deg": camera.pitch_deg,
+            "roll_used_deg": camera.roll_deg,
+            "heading_used_deg": camera.heading_deg,
+        },
         "sequence": {
             **sequence.model_dump(mode="json"),
             "frame": frame,
