@@ -19,7 +19,7 @@ import numpy as np
 
 from ..haze import HAZE_BOTTOM_M, Extinction, asm_composite, path_length_in_slab
 from ..seeds import RenderPass, render_seed
-from .scene import LoadedScene, stratified_spp
+from .scene import VESSEL_SHAPE, LoadedScene, stratified_spp
 
 GEOMETRY_MAX_CROSSINGS = 16
 """Surfaces a pixel ray walks through: the haze box (twice at most) and vessels behind vessels."""
@@ -71,9 +71,11 @@ def render_geometry(loaded: LoadedScene) -> GeometryPass:
     origin = cam.origin
     directions = np.stack([np.array(ray.d.x), np.array(ray.d.y), np.array(ray.d.z)], axis=-1)
 
-    # Map Mitsuba shape ids to vessel indices (-1 sea, -2 haze box) with a sorted lookup table.
+    # Map Mitsuba shape ids to what they are (-1 sea, -2 haze box, VESSEL_SHAPE a vessel mesh,
+    # whose face then tells the vessel) with a sorted lookup table.
     keys = np.array(sorted(loaded.shape_ids), dtype=np.int64)
     values = np.array([loaded.shape_ids[k] for k in keys], dtype=np.int32)
+    n_vessels = loaded.n_vessels
     n = width * height
     pixel = np.arange(n)
     hit_point = np.full((n, 3), np.nan)
@@ -91,13 +93,14 @@ def render_geometry(loaded: LoadedScene) -> GeometryPass:
         valid = np.array(si.is_valid())
         sid = np.array(dr.reinterpret_array(mi.UInt32, si.shape)).astype(np.int64)
         owner = np.where(valid, values[np.clip(np.searchsorted(keys, sid), 0, len(keys) - 1)], -3)
+        owner = _vessel_owners(loaded, owner, sid, np.array(si.prim_index))
         p = np.stack([np.array(si.p.x), np.array(si.p.y), np.array(si.p.z)], axis=-1)
         found = pending & valid & (owner != -2)
         hit_point[found] = p[found]
         first[found] = owner[found]
         pending &= valid & (owner == -2)
         behind = tracing & (owner >= 0)
-        footprint.append(pixel[behind] * len(values) + owner[behind])
+        footprint.append(pixel[behind] * max(n_vessels, 1) + owner[behind])
         # Keep walking through the haze box and vessels; stop at the sea or the sky.
         tracing &= valid & ((owner == -2) | (owner >= 0))
         if not tracing.any():
@@ -113,8 +116,7 @@ def render_geometry(loaded: LoadedScene) -> GeometryPass:
     distance = np.linalg.norm(hit_point - origin, axis=-1)
     distance = np.where(np.isfinite(distance), distance, np.inf).astype(np.float32)
     pairs = np.unique(np.concatenate(footprint)) if footprint else np.zeros(0, np.int64)
-    n_vessels = int(values.max()) + 1 if values.size else 0
-    footprint_px = np.bincount(pairs % len(values), minlength=n_vessels)[:n_vessels]
+    footprint_px = np.bincount(pairs % max(n_vessels, 1), minlength=n_vessels)[:n_vessels]
     return GeometryPass(
         distance.reshape(height, width),
         np.where(first >= 0, first, -1).astype(np.int32).reshape(height, width),
@@ -122,6 +124,17 @@ def render_geometry(loaded: LoadedScene) -> GeometryPass:
         origin,
         footprint_px.astype(np.int64),
     )
+
+
+def _vessel_owners(
+    loaded: LoadedScene, owner: np.ndarray, sid: np.ndarray, prim: np.ndarray
+) -> np.ndarray:
+    """``owner`` with each hit on a vessel mesh replaced by the vessel index of its face."""
+    owner = owner.copy()
+    for key, face_vessel in loaded.vessel_faces.items():
+        on = (sid == key) & (owner == VESSEL_SHAPE)
+        owner[on] = face_vessel[prim[on]]
+    return owner
 
 
 def render_radiance(

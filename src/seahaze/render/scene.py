@@ -24,7 +24,7 @@ alone, :func:`_sea_bsdf` with :attr:`LoadedScene.sea_roughness`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -42,7 +42,10 @@ from ..world import (
     SceneGeometry,
     sun_direction,
 )
+from .fleet import PAINT_ATTRIBUTE, fleet_meshes, vessel_bsdf
 
+VESSEL_SHAPE = -4
+""":attr:`LoadedScene.shape_ids` value of the vessel meshes (the face tells which vessel)."""
 HAZE_ID = "haze"
 HAZE_BOX_ID = "haze_box"
 FAR_CLIP_M = 1.0e7
@@ -106,19 +109,32 @@ def _sensor_dict(
     return sensor
 
 
-def _mesh(mesh: MeshData, bsdf: dict) -> Any:
-    """A Mitsuba mesh built straight from numpy arrays (no files)."""
+def _mesh(
+    name: str,
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    bsdf: dict,
+    attributes: dict[str, np.ndarray],
+) -> Any:
+    """A Mitsuba mesh built straight from numpy arrays (no files); ``attributes`` maps a
+    ``vertex_*`` name to (N,) or (N, C) float32 values."""
     mi = _mi()
     props = mi.Properties()
     props["bsdf"] = mi.load_dict(bsdf)
-    m = mi.Mesh(mesh.name, vertex_count=len(mesh.vertices), face_count=len(mesh.faces), props=props)
-    for name, values in mesh.attributes.items():
-        m.add_attribute(f"vertex_{name}", 1, np.ascontiguousarray(values, dtype=np.float32))
+    m = mi.Mesh(name, vertex_count=len(vertices), face_count=len(faces), props=props)
+    for key, values in attributes.items():
+        values = np.ascontiguousarray(values, dtype=np.float32)
+        m.add_attribute(key, 1 if values.ndim == 1 else values.shape[1], values.ravel())
     params = mi.traverse(m)
-    params["vertex_positions"] = np.ascontiguousarray(mesh.vertices, dtype=np.float32).ravel()
-    params["faces"] = np.ascontiguousarray(mesh.faces, dtype=np.uint32).ravel()
+    params["vertex_positions"] = np.ascontiguousarray(vertices, dtype=np.float32).ravel()
+    params["faces"] = np.ascontiguousarray(faces, dtype=np.uint32).ravel()
     params.update()
     return m
+
+
+def _sea_mesh(sea: MeshData, bsdf: dict) -> Any:
+    attributes = {f"vertex_{name}": values for name, values in sea.attributes.items()}
+    return _mesh(sea.name, sea.vertices, sea.faces, bsdf, attributes)
 
 
 def _sea_bsdf(spec: SceneSpec, roughness: float) -> dict:
@@ -164,21 +180,6 @@ def sea_surface_bsdf(spec: SceneSpec, geometry: SceneGeometry) -> dict:
     }
 
 
-def _vessel_bsdf(rgb: tuple[float, float, float], roughness: float) -> dict:
-    """Painted steel: a dielectric varnish over a diffuse paint colour."""
-    return {
-        "type": "roughplastic",
-        "distribution": "ggx",
-        "alpha": max(0.05, roughness),
-        "diffuse_reflectance": {"type": "rgb", "value": list(rgb)},
-    }
-
-
-BLACK_BSDF: dict = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
-"""A perfectly black surface (reflects nothing). Painted steel with a zero paint colour is not
-black: its varnish still reflects the sky specularly; the ``seahaze verify`` targets need zero."""
-
-
 def stratified_spp(spp: int) -> int:
     """The most samples per pixel, at most ``spp``, that Mitsuba's ``multijitter`` sampler
     (:data:`PHYSICAL_SAMPLER`) takes without rounding up: a grid of ``a × b`` with
@@ -215,7 +216,8 @@ class LoadedScene:
     box_half_width_m: float
     haze_top_m: float
     shape_ids: dict[int, int]
-    """Mitsuba shape registry id → vessel index (the sea and the haze box map to -1, -2)."""
+    """Mitsuba shape registry id → what it is: the sea -1, the haze box -2, a vessel mesh
+    :data:`VESSEL_SHAPE` (its faces' vessels are in :attr:`vessel_faces`)."""
     spec: SceneSpec | None = None
     """The scene spec it was built from (the ``physical`` mode needs the sun and sky)."""
     sea_roughness: float = 0.0
@@ -229,6 +231,10 @@ class LoadedScene:
     sea_foam_reflectance: float = FOAM_REFLECTANCE
     """Mean (effective) visible reflectance of that foam, a Lambertian albedo (0.22, Koepke
     1984): the foam-weighted mean of the per-vertex foam reflectance."""
+    vessel_faces: dict[int, np.ndarray] = field(default_factory=dict)
+    """Shape registry id of each vessel mesh → the vessel index of every face (-1: none)."""
+    n_vessels: int = 0
+    """Vessels in the scene (indices 0 … n_vessels − 1)."""
     clean_scene: Any = None
     """The same surfaces, sun and sky without the haze box, for the clean pass (None: ``scene``
     has no box and serves)."""
@@ -274,7 +280,7 @@ def build_scene(
     """Load the Mitsuba scene for ``spec`` with a haze box wide enough for ``visibilities_m``
     and objects out to ``reach_m`` (:func:`seahaze.haze.haze_box_half_width`).
 
-    ``black_vessels`` gives every vessel part :data:`BLACK_BSDF` instead of painted steel (the
+    ``black_vessels`` gives every vessel a black diffuse surface instead of painted steel (the
     black calibration targets of ``seahaze verify``). ``haze_box=False`` leaves the Mitsuba
     medium out: the ``physical`` mode computes the haze analytically in its own integrator and
     needs only the surfaces, sun and sky.
@@ -333,11 +339,14 @@ def build_scene(
     }
     if not haze_box:
         del scene[HAZE_BOX_ID], scene[HAZE_ID]
-    surfaces = {"sea": _mesh(geometry.sea, sea_surface_bsdf(spec, geometry))}
-    for vessel in geometry.vessels:
-        for part in vessel.parts:
-            bsdf = BLACK_BSDF if black_vessels else _vessel_bsdf(part.rgb, part.roughness)
-            surfaces[part.name] = _mesh(part, bsdf)
+    surfaces = {"sea": _sea_mesh(geometry.sea, sea_surface_bsdf(spec, geometry))}
+    # The vessels as the same fixed set of meshes in every scene (render/fleet.py): one
+    # compiled kernel serves every scene of a batch.
+    fleet = fleet_meshes(geometry.vessels, (camera.x_m, camera.y_m))
+    for part in fleet:
+        bsdf = vessel_bsdf(part.roughness, black_vessels)
+        paint = {f"{PAINT_ATTRIBUTE}": part.paint}
+        surfaces[part.name] = _mesh(part.name, part.vertices, part.faces, bsdf, paint)
     scene.update(surfaces)
     clean_scene = None
     if haze_box:
@@ -350,11 +359,13 @@ def build_scene(
     loaded = mi.load_dict(scene)
     params = mi.traverse(loaded)
     shape_ids: dict[int, int] = {}
-    vessel_of_part = {part.name: v.index for v in geometry.vessels for part in v.parts}
+    vessel_faces: dict[int, np.ndarray] = {}
+    faces_of = {part.name: part.face_vessel for part in fleet}
     for shape in loaded.shapes():
-        sid = shape.id()
-        index = vessel_of_part.get(sid, -2 if sid == HAZE_BOX_ID else -1)
-        shape_ids[shape_registry_id(shape)] = index
+        sid, key = shape.id(), shape_registry_id(shape)
+        shape_ids[key] = VESSEL_SHAPE if sid in faces_of else (-2 if sid == HAZE_BOX_ID else -1)
+        if sid in faces_of:
+            vessel_faces[key] = faces_of[sid]
     return LoadedScene(
         loaded,
         params,
@@ -363,6 +374,8 @@ def build_scene(
         top,
         shape_ids,
         spec,
+        vessel_faces=vessel_faces,
+        n_vessels=len(geometry.vessels),
         sea_roughness=geometry.sea_roughness,
         sea_foam_coverage=geometry.sea_foam_coverage,
         clean_scene=clean_scene,

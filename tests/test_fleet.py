@@ -1,0 +1,115 @@
+"""The vessels as a fixed set of Mitsuba meshes (src/seahaze/render/fleet.py): every part kept
+with its paint, its vessel and its roughness, and one compiled kernel for scenes with
+different vessels."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from seahaze import vessels
+from seahaze.render.fleet import HIDDEN_DEPTH_M, ROUGHNESS_CLASSES, fleet_meshes, roughness_class
+from seahaze.sceneio import parse_scene_text
+from seahaze.vessels.materials import Material
+from seahaze.world import build_geometry, frame_camera
+
+
+def _materials_of(module: object) -> set[float]:
+    found: set[float] = set()
+
+    def walk(value: object) -> None:
+        if isinstance(value, Material):
+            found.add(value.roughness)
+        elif isinstance(value, tuple | list):
+            for item in value:
+                walk(item)
+        elif isinstance(value, dict):
+            for item in value.values():
+                walk(item)
+
+    for value in vars(module).values():
+        walk(value)
+    return found
+
+
+def test_every_built_in_roughness_is_a_class_of_its_own() -> None:
+    """Built-in vessels keep their exact roughness: every roughness their materials use is a
+    class (a user mesh's goes to the nearest one)."""
+    from seahaze.vessels import buoy, materials, merchant, smallcraft, user_mesh
+
+    used = set().union(
+        *(_materials_of(m) for m in (materials, buoy, merchant, smallcraft, user_mesh))
+    )
+    assert used <= set(ROUGHNESS_CLASSES)
+    for kind in vessels.CLASS_NAMES:
+        for seed in range(3):
+            model = vessels.build_vessel(kind, None, np.random.default_rng(seed))
+            assert {part.material.roughness for part in model.parts} <= set(ROUGHNESS_CLASSES)
+    assert ROUGHNESS_CLASSES[roughness_class(0.02)] == 0.15
+    assert ROUGHNESS_CLASSES[roughness_class(0.52)] == 0.5
+
+
+SCENE = """
+name: fleet
+camera: {height_m: 12, pitch_deg: -2, resolution: [64, 36]}
+sea: {quality: low}
+vessels:
+  placed:
+    - {class: tug, distance_m: 300, bearing_deg: 5, heading_deg: 200, length_m: 30}
+    - {class: sailboat, distance_m: 500, bearing_deg: -8, heading_deg: 90}
+    - {class: container_ship, distance_m: 1500, bearing_deg: 12, heading_deg: 10}
+haze: {levels: [1000]}
+render: {spp: 1, seed: 3}
+"""
+
+
+def test_every_part_keeps_its_faces_paint_and_vessel() -> None:
+    spec = parse_scene_text(SCENE, "fleet.yaml")
+    camera = frame_camera(spec, None)
+    geometry = build_geometry(spec, camera, None)
+    fleet = fleet_meshes(geometry.vessels, (camera.x_m, camera.y_m))
+    assert [m.roughness for m in fleet] == list(ROUGHNESS_CLASSES)
+    parts = [(v.index, p) for v in geometry.vessels for p in v.parts]
+    for k, mesh in enumerate(fleet):
+        mine = [(i, p) for i, p in parts if roughness_class(p.roughness) == k]
+        if not mine:  # a placeholder: one small triangle far under the sea, nobody's
+            assert mesh.face_vessel.tolist() == [-1]
+            assert np.all(mesh.vertices[:, 2] == -HIDDEN_DEPTH_M)
+            continue
+        assert len(mesh.faces) == sum(len(p.faces) for _, p in mine)
+        start = 0
+        for index, part in mine:  # faces in order, each on its part's own vertices
+            faces = mesh.faces[start : start + len(part.faces)]
+            np.testing.assert_array_equal(mesh.vertices[faces], part.vertices[part.faces])
+            np.testing.assert_allclose(
+                mesh.paint[faces], np.broadcast_to(part.rgb, (*faces.shape, 3))
+            )
+            assert np.all(mesh.face_vessel[start : start + len(part.faces)] == index)
+            start += len(part.faces)
+
+
+def test_scenes_with_different_vessels_run_one_compiled_kernel() -> None:
+    """Two physical renders of scenes with different vessel kinds and counts launch the same
+    largest kernel (drjit's kernel hash): the second scene compiles nothing big."""
+    dr = pytest.importorskip("drjit")
+    from seahaze.render.engine import render_scene
+
+    other = (
+        SCENE.replace("name: fleet", "name: other")
+        .replace(
+            "    - {class: container_ship, distance_m: 1500, bearing_deg: 12, heading_deg: 10}\n",
+            "",
+        )
+        .replace("class: tug", "class: fishing_boat")
+    )
+    hashes = []
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        for text, name in ((SCENE, "fleet"), (other, "other")):
+            dr.kernel_history()  # clear
+            render_scene(parse_scene_text(text, f"{name}.yaml"), name)
+            biggest = max(dr.kernel_history(), key=lambda h: h.get("operation_count", 0))
+            hashes.append(biggest["hash"])
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    assert hashes[0] == hashes[1]
