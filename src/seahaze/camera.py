@@ -147,4 +147,3 @@ class Camera:
         heading = math.radians(self.heading_deg)
         azimuth = np.arctan2(d[:, 1], d[:, 0]) - heading
         return float(np.max(np.abs(np.angle(np.exp(1j * azimuth)))))
-
