@@ -9,6 +9,7 @@ reuse it (only the medium or the integrator's haze parameters change between lev
 
 from __future__ import annotations
 
+import gc
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -145,6 +146,10 @@ def open_session(
     with _timed(timings, "geometry_build"):
         geometry = build_geometry(spec, camera, frame) if geometry is None else geometry
     with _timed(timings, "scene_load"):
+        # drjit traces a virtual call over every live instance of a type: BSDFs of an earlier
+        # scene that reference cycles still keep alive would join this scene's calls and make
+        # its kernel differ from the compiled one (render/fleet.py). Free them first.
+        gc.collect()
         # The physical mode computes the haze itself: no Mitsuba medium in its scene.
         loaded = build_scene(
             spec,
