@@ -197,13 +197,18 @@ def height_at(
     return surface.displacement(x0, y0)[2]
 
 
+def smoothstep(t: np.ndarray) -> np.ndarray:
+    """``3t² - 2t³`` of ``t`` clipped to [0, 1]: a ramp from 0 to 1 with zero slope at both ends."""
+    t = np.clip(t, 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
 def lowpass_weight(wavelength_m: np.ndarray, spacing_m: np.ndarray | float) -> np.ndarray:
     """Weight of a wave of wavelength ``wavelength_m`` on a mesh of vertex spacing
     ``spacing_m``: 1 at >= 4 spacings, 0 at <= 2 spacings (the sampling limit), smoothstep in
     ``log2(wavelength/spacing)`` between."""
     ratio = np.asarray(wavelength_m, dtype=float) / np.maximum(spacing_m, 1e-12)
-    t = np.clip(np.log2(np.maximum(ratio, 1e-12)) - 1.0, 0.0, 1.0)
-    return t * t * (3.0 - 2.0 * t)
+    return smoothstep(np.log2(np.maximum(ratio, 1e-12)) - 1.0)
 
 
 def cell_samples(

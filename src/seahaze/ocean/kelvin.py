@@ -44,6 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import fft as sfft
 
+from .base import smoothstep
 from .spectra import GRAVITY
 
 KELVIN_HALF_ANGLE_RAD = math.asin(1.0 / 3.0)
@@ -220,9 +221,3 @@ def _steep_box(
         eta0 + (rows.min() - 1) * h,
         eta0 + (rows.max() + 1) * h,
     )
-
-
-def smoothstep(t: np.ndarray) -> np.ndarray:
-    """``3t² - 2t³`` of ``t`` clipped to [0, 1]: a ramp from 0 to 1 with zero slope at both ends."""
-    t = np.clip(t, 0.0, 1.0)
-    return t * t * (3.0 - 2.0 * t)

@@ -76,7 +76,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from .base import OceanSurface, cell_samples
+from .base import OceanSurface, cell_samples, smoothstep
 from .whitecaps import FOAM_REFLECTANCE, FRESH_FOAM_REFLECTANCE
 
 if TYPE_CHECKING:
@@ -176,9 +176,7 @@ def displacement_fade(r: np.ndarray, fade_start_m: float, fade_end_m: float) -> 
     if fade_end_m <= 0.0:
         return np.zeros_like(r)
     lo, hi = math.log(fade_start_m), math.log(fade_end_m)
-    t = (np.log(np.maximum(r, 1e-9)) - lo) / (hi - lo)
-    t = np.clip(t, 0.0, 1.0)
-    return 1.0 - t * t * (3.0 - 2.0 * t)
+    return 1.0 - smoothstep((np.log(np.maximum(r, 1e-9)) - lo) / (hi - lo))
 
 
 def horizon_gap_angle(camera_height_m: float, radius_m: float, n_theta: int | None = None) -> float:
@@ -414,8 +412,7 @@ def view_detail(azimuth_rad: np.ndarray, view: tuple[float, float] | None) -> np
     if full + taper >= math.pi:
         return None
     off = np.abs(np.angle(np.exp(1j * (np.asarray(azimuth_rad) - heading))))
-    t = np.clip((full + taper - off) / taper, 0.0, 1.0)
-    detail = t * t * (3.0 - 2.0 * t)
+    detail = smoothstep((full + taper - off) / taper)
     detail[0] = 1.0  # the centre vertex, under the camera
     return detail
 

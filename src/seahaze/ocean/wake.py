@@ -35,12 +35,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .base import cell_samples, lowpass_weight
-from .kelvin import (
-    BREAKING_SLOPE,
-    smoothstep,
-    wave_grid,
-)
+from .base import cell_samples, lowpass_weight, smoothstep
+from .kelvin import BREAKING_SLOPE, wave_grid
 from .spectra import GRAVITY
 
 KNOT_M_S = 1852.0 / 3600.0

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from ..world import VesselInstance
+from ..world import MeshData, VesselInstance
 
 ROUGHNESS_CLASSES = (0.15, 0.3, 0.35, 0.4, 0.45, 0.5, 0.6, 0.65, 0.7, 0.8, 0.85)
 """Roughness of the vessel meshes: every roughness of the built-in vessels' materials
@@ -75,7 +75,7 @@ def fleet_meshes(
 ) -> list[FleetMesh]:
     """One :class:`FleetMesh` per roughness class, in class order; an unused class holds a
     placeholder triangle :data:`HIDDEN_DEPTH_M` under ``below_xy`` (m)."""
-    groups: list[list[tuple[int, Any]]] = [[] for _ in ROUGHNESS_CLASSES]
+    groups: list[list[tuple[int, MeshData]]] = [[] for _ in ROUGHNESS_CLASSES]
     for vessel in vessels:
         for part in vessel.parts:
             groups[roughness_class(part.roughness)].append((vessel.index, part))
@@ -86,7 +86,7 @@ def fleet_meshes(
 
 
 def _merge(
-    name: str, roughness: float, parts: list[tuple[int, Any]], below_xy: tuple[float, float]
+    name: str, roughness: float, parts: list[tuple[int, MeshData]], below_xy: tuple[float, float]
 ) -> FleetMesh:
     if not parts:
         x, y = below_xy

@@ -345,7 +345,7 @@ def build_scene(
     fleet = fleet_meshes(geometry.vessels, (camera.x_m, camera.y_m))
     for part in fleet:
         bsdf = vessel_bsdf(part.roughness, black_vessels)
-        paint = {f"{PAINT_ATTRIBUTE}": part.paint}
+        paint = {PAINT_ATTRIBUTE: part.paint}
         surfaces[part.name] = _mesh(part.name, part.vertices, part.faces, bsdf, paint)
     scene.update(surfaces)
     clean_scene = None
@@ -363,9 +363,10 @@ def build_scene(
     faces_of = {part.name: part.face_vessel for part in fleet}
     for shape in loaded.shapes():
         sid, key = shape.id(), shape_registry_id(shape)
-        shape_ids[key] = VESSEL_SHAPE if sid in faces_of else (-2 if sid == HAZE_BOX_ID else -1)
         if sid in faces_of:
-            vessel_faces[key] = faces_of[sid]
+            shape_ids[key], vessel_faces[key] = VESSEL_SHAPE, faces_of[sid]
+        else:
+            shape_ids[key] = -2 if sid == HAZE_BOX_ID else -1
     return LoadedScene(
         loaded,
         params,
