@@ -4,7 +4,14 @@ moving vessels, as height and foam fields to add to the sea surface.
 Waves
     The steady Kelvin wave field of each hull comes from :mod:`seahaze.ocean.kelvin` (Havelock's
     pressure ship, solved on a grid in the vessel's frame); here it is placed at the vessel's
-    position and heading and sampled at world points.
+    position and heading and sampled at world points. A turning vessel's pattern is bent along
+    the arc it sailed: the grid is sampled at the points' track coordinates (below) instead of
+    its straight frame. That is an approximation — it is the steady pattern of a straight
+    course, bent; the waves of a ship on a turn differ (their sources sit on a curve, so the
+    divergent waves spread on the outside of the turn and crowd on the inside). It is good where
+    the turning radius ``R`` is large compared to the width of the wake: the Kelvin wedge is
+    ``2·tan(19.47°)·s ≈ 0.7·s`` wide at ``s`` behind, so to about ``s ≈ R`` behind the vessel;
+    near the turn's centre (``|eta| -> R`` on the inside) the bent field is squeezed.
 
 Breaking (bow wave foam)
     Where the linear wave slope ``|grad zeta|`` exceeds :data:`BREAKING_SLOPE` (0.44, the slope
@@ -24,7 +31,27 @@ Turbulent foam wake
     Grace & Weber 1978, *Bubbles, Drops and Particles*, ch. 7): ``tau = T / 0.2 m/s``, at least
     2 s (:func:`wake_foam_decay_s`). A tanker of 12 m draft keeps a white wake for about a
     minute (half a kilometre at 14 kn, two ship lengths), a speedboat of 0.6 m for 3 s (50 m at
-    30 kn). Cross profile: ``(1 - (eta/b)²)²``.
+    30 kn). Cross profile: ``(1 - (eta/b)²)²``. The band follows the track the vessel sailed: on
+    a turn it curves along the arc (``s`` and ``eta`` are track coordinates), centred on the
+    circle the stern swept, ``sqrt(R² + (L/2)²)`` from the turn's centre — outside the midships
+    circle by about ``L²/8R`` (1.7 m for a 30 m tug on a 66 m circle), where the propeller was.
+
+Turning vessels (track coordinates)
+    A vessel turning at a constant rate ``r`` (deg/s, counter-clockwise positive) at speed ``U``
+    sails on a circle of radius ``R = U/|r|`` (:meth:`seahaze.motion.Course.pose`), its centre
+    to port for ``r > 0`` and to starboard for ``r < 0``. A world point ahead of midships (along
+    the current heading) keeps its straight-frame coordinates; a point behind gets
+    ``xi = -R·phi``, the arc length back along the sailed circle to the angle ``phi`` it sits at
+    about the centre (swept back from midships), and ``eta = ±(R - rho)``, its signed distance
+    from the circle (``rho`` from the centre; positive to port). The two agree where they meet
+    (on the line through midships and the centre, whose near side is tangent to the arc), so the
+    fields stay continuous there. The past track is one circle: beyond half of it (``phi = π``)
+    points would be ambiguous, and near ``π`` the far side of the circle meets the region ahead
+    of the vessel. So the swept angle is limited to :data:`MAX_SWEPT_ANGLE_RAD` (0.9·π): points
+    beyond get ``xi = -inf`` (outside every wake field), and the turning vessel's waves and foam
+    fade out (smoothstep) over the last :data:`SWEPT_FADE_RAD` before it, so the limit draws no
+    edge. (The sequence's vessel is taken to have been turning for as long as its wake is.) A
+    straight course (``r = 0``) uses the straight frame unchanged.
 """
 
 from __future__ import annotations
@@ -54,6 +81,14 @@ FOAM_CUTOFF = 1.0e-3
 MAX_FOAM_SAMPLES = 16
 """Most samples per axis when a mesh vertex's footprint is averaged over the wake foam."""
 
+MAX_SWEPT_ANGLE_RAD = 0.9 * math.pi
+"""Largest angle (rad) a turning vessel's wake reaches back along its circle (module docstring):
+below the half-circle, where points behind would become ambiguous."""
+
+SWEPT_FADE_RAD = 0.25 * math.pi
+"""Swept angle (rad) over which a turning vessel's waves and foam fade out before
+:data:`MAX_SWEPT_ANGLE_RAD`."""
+
 
 @dataclass(frozen=True)
 class MovingVessel:
@@ -66,6 +101,8 @@ class MovingVessel:
         length_m: waterline length (m).
         beam_m: beam (m).
         draft_m: draft (m).
+        turn_rate_deg_s: rate of turn (deg/s, counter-clockwise positive); 0 sails straight.
+            Its waves and wake follow the circle it sailed (module docstring).
     """
 
     x: float
@@ -75,10 +112,13 @@ class MovingVessel:
     length_m: float
     beam_m: float
     draft_m: float
+    turn_rate_deg_s: float = 0.0
 
     def __post_init__(self) -> None:
         if self.speed_m_s < 0.0 or min(self.length_m, self.beam_m, self.draft_m) <= 0.0:
             raise ValueError("speed must be >= 0 and length, beam, draft > 0")
+        if not math.isfinite(self.turn_rate_deg_s):
+            raise ValueError(f"turn rate must be finite, got {self.turn_rate_deg_s}")
 
     @property
     def froude_number(self) -> float:
@@ -92,6 +132,57 @@ class MovingVessel:
         dy = np.asarray(y, dtype=float) - self.y
         return dx * math.cos(h) + dy * math.sin(h), -dx * math.sin(h) + dy * math.cos(h)
 
+    @property
+    def curvature_per_m(self) -> float:
+        """Signed curvature of the track, ``r/U`` (1/m; positive turning to port, 1/R in
+        magnitude); 0 on a straight course or at rest (no track to follow)."""
+        if self.turn_rate_deg_s == 0.0 or self.speed_m_s == 0.0:
+            return 0.0
+        return math.radians(self.turn_rate_deg_s) / self.speed_m_s
+
+    @property
+    def stern_track_eta_m(self) -> float:
+        """Track coordinate ``eta`` (m) of the circle the stern sweeps on a turn: about
+        ``L²/8R`` outside the midships circle (to starboard on a turn to port),
+        ``-κ(L/2)² / (1 + sqrt(1 + (κL/2)²))`` for the signed curvature ``κ``
+        (:attr:`curvature_per_m`), the stable form of ``∓(sqrt(R² + (L/2)²) - R)``; 0 on a
+        straight course."""
+        half = 0.5 * self.length_m
+        curvature = self.curvature_per_m
+        return -curvature * half * half / (1.0 + math.hypot(1.0, curvature * half))
+
+    def to_track_frame(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World (x, y) (m) → track coordinates ``(xi, eta)`` (m): signed distance along the
+        sailed track from midships (negative behind) and signed distance to port of the track.
+
+        Straight course: exactly :meth:`to_vessel_frame`. Turning: ahead of midships the
+        straight frame, behind it the circle sailed (module docstring, "Turning vessels");
+        points more than :data:`MAX_SWEPT_ANGLE_RAD` back around the circle get ``xi = -inf``.
+        """
+        xi, eta = self.to_vessel_frame(x, y)
+        curvature = self.curvature_per_m
+        if curvature == 0.0:
+            return xi, eta
+        return _bend_to_track(xi, eta, curvature)
+
+
+def _bend_to_track(
+    xi: np.ndarray, eta: np.ndarray, curvature: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Straight-frame ``(xi, eta)`` (m) → track coordinates on a circle of signed curvature
+    ``curvature`` (1/m) through midships, tangent to the heading (module docstring)."""
+    k = abs(curvature)
+    # Position about the circle's centre (0, R·sign) in units of R: ``toward`` along the
+    # centre-to-midships direction, ``back`` along the direction the vessel came from.
+    back, toward = -k * xi, 1.0 - curvature * eta
+    swept = np.arctan2(back, toward)  # angle swept back from midships (rad), (0, π) behind
+    rho = np.hypot(back, toward)  # distance from the centre / R
+    # eta = (1 - rho)/curvature, written without the cancellation of 1 - rho on gentle turns.
+    eta_arc = (2.0 * eta - curvature * (xi * xi + eta * eta)) / (1.0 + rho)
+    xi_arc = np.where(swept <= MAX_SWEPT_ANGLE_RAD, -swept / k, -np.inf)
+    behind = xi < 0.0
+    return np.where(behind, xi_arc, xi), np.where(behind, eta_arc, eta)
+
 
 def wake_foam_decay_s(vessel: MovingVessel) -> float:
     """e-folding age (s) of the turbulent wake's foam: the hull draft over the bubbles' rise
@@ -102,8 +193,10 @@ def wake_foam_decay_s(vessel: MovingVessel) -> float:
 class ShipWaves:
     """The steady wave field of one :class:`MovingVessel` on a grid in its own frame.
 
-    ``height`` and ``slope`` sample it (bilinearly) at world points; zero outside the grid,
-    ahead of the bow beyond one transverse wavelength, and beyond :func:`wake_length`.
+    ``height`` and ``slope`` sample it (bilinearly) at world points' track coordinates
+    (:meth:`MovingVessel.to_track_frame`: the straight frame, or bent along a turn); zero
+    outside the grid, ahead of the bow beyond one transverse wavelength, and beyond
+    :func:`~seahaze.ocean.kelvin.wake_length_m`.
     """
 
     def __init__(self, vessel: MovingVessel, gravity: float = GRAVITY) -> None:
@@ -122,8 +215,21 @@ class ShipWaves:
         self._height, self._slope = grid.height, grid.slope
         self._breaking_box = grid.breaking_box
 
+    def _track(
+        self, x: np.ndarray, y: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Track coordinates ``(xi, eta)`` (m) of world points and, for a turning vessel, the
+        weight (0–1) fading its fields out before :data:`MAX_SWEPT_ANGLE_RAD`; None when
+        straight (no weight, so a straight course's values stay exactly as they were)."""
+        xi, eta = self.vessel.to_track_frame(x, y)
+        k = abs(self.vessel.curvature_per_m)
+        if k == 0.0:
+            return xi, eta, None
+        # k·xi is minus the swept angle behind midships (and -inf beyond the limit).
+        return xi, eta, smoothstep((MAX_SWEPT_ANGLE_RAD + k * xi) / SWEPT_FADE_RAD)
+
     def _sample(self, grid: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        xi, eta = self.vessel.to_vessel_frame(x, y)
+        xi, eta, fade = self._track(x, y)
         u = (xi - self.origin[0]) / self.spacing_m
         v = (eta - self.origin[1]) / self.spacing_m
         ny, nx = self.shape
@@ -138,7 +244,7 @@ class ShipWaves:
         top = grid[j0, i0] * (1.0 - tu) + grid[j0, i0 + 1] * tu
         bottom = grid[j0 + 1, i0] * (1.0 - tu) + grid[j0 + 1, i0 + 1] * tu
         out[inside] = top * (1.0 - tv) + bottom * tv
-        return out
+        return out if fade is None else out * fade
 
     def height(
         self, x: np.ndarray, y: np.ndarray, spacing_m: np.ndarray | float | None = None
@@ -174,14 +280,17 @@ class ShipWaves:
         v = self.vessel
         if not self.moving:
             return np.zeros(x.shape)
-        xi, eta = v.to_vessel_frame(x, y)
-        s = -xi - 0.5 * v.length_m  # distance behind the stern
+        xi, eta, fade = self._track(x, y)
+        if fade is not None:
+            eta = eta - v.stern_track_eta_m  # on a turn, the band lies on the stern's circle
+        s = -xi - 0.5 * v.length_m  # distance behind the stern along the track
         half_width = 0.5 * v.beam_m * (1.0 + np.maximum(s, 0.0) / v.beam_m) ** 0.2
         across = np.clip(1.0 - (eta / half_width) ** 2, 0.0, 1.0) ** 2
         age = np.maximum(s, 0.0) / v.speed_m_s
         # Ramp in over a tenth of the beam at the stern so the band starts softly.
         start = smoothstep(s / (0.1 * v.beam_m))
-        return start * across * np.exp(-age / wake_foam_decay_s(v))
+        foam = start * across * np.exp(-age / wake_foam_decay_s(v))
+        return foam if fade is None else foam * fade
 
     def foam(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Foam fraction (0–1): turbulent wake and breaking waves, overlapping as independent
@@ -192,9 +301,10 @@ class ShipWaves:
         return 1.0 - (1.0 - a) * (1.0 - self.breaking_foam(x, y))
 
     def foam_region(self, x: np.ndarray, y: np.ndarray, margin_m: np.ndarray | float) -> np.ndarray:
-        """True where a point (x, y) (m) lies within ``margin_m`` of a region that can hold this
-        vessel's foam: the turbulent wake until its foam is below :data:`FOAM_CUTOFF`, and the
-        box of the grid cells steep enough to break."""
+        """True where a point (x, y) (m) lies within ``margin_m`` (m, world distance) of a region
+        that can hold this vessel's foam: the turbulent wake until its foam is below
+        :data:`FOAM_CUTOFF`, and the box of the grid cells steep enough to break — rectangles in
+        track coordinates, which a turn bends into annular sectors (:func:`_near_track_box`)."""
         if not self.moving:
             return np.zeros(np.broadcast(np.asarray(x), np.asarray(y)).shape, dtype=bool)
         v = self.vessel
@@ -202,6 +312,14 @@ class ShipWaves:
         stern = -0.5 * v.length_m
         behind = v.speed_m_s * wake_foam_decay_s(v) * math.log(1.0 / FOAM_CUTOFF)
         half_width = 0.5 * v.beam_m * (1.0 + behind / v.beam_m) ** 0.2
+        curvature = v.curvature_per_m
+        if curvature != 0.0:
+            centre = v.stern_track_eta_m
+            wake = (stern - behind, stern, centre - half_width, centre + half_width)
+            inside = _near_track_box(xi, eta, wake, margin_m, curvature)
+            if self._breaking_box is not None:
+                inside |= _near_track_box(xi, eta, self._breaking_box, margin_m, curvature)
+            return inside
         inside = (
             (xi <= stern + margin_m)
             & (xi >= stern - behind - margin_m)
@@ -209,12 +327,7 @@ class ShipWaves:
         )
         box = self._breaking_box
         if box is not None:
-            inside |= (
-                (xi >= box[0] - margin_m)
-                & (xi <= box[1] + margin_m)
-                & (eta >= box[2] - margin_m)
-                & (eta <= box[3] + margin_m)
-            )
+            inside |= _near_box(xi, eta, box, margin_m)
         return inside
 
     @property
@@ -251,6 +364,64 @@ class ShipWaves:
             )
             out[pick] = self.foam(sx, sy).mean(axis=1)
         return out
+
+
+def _near_box(
+    xi: np.ndarray,
+    eta: np.ndarray,
+    box: tuple[float, float, float, float],
+    margin_m: np.ndarray | float,
+) -> np.ndarray:
+    """True where straight-frame points ``(xi, eta)`` (m) lie within ``margin_m`` of the box
+    ``(xi_min, xi_max, eta_min, eta_max)`` grown per side (a square margin)."""
+    return (
+        (xi >= box[0] - margin_m)
+        & (xi <= box[1] + margin_m)
+        & (eta >= box[2] - margin_m)
+        & (eta <= box[3] + margin_m)
+    )
+
+
+def _near_track_box(
+    xi: np.ndarray,
+    eta: np.ndarray,
+    box: tuple[float, float, float, float],
+    margin_m: np.ndarray | float,
+    curvature: float,
+) -> np.ndarray:
+    """True where points, given in the straight frame ``(xi, eta)`` (m), lie within
+    ``margin_m`` (m, world distance) of the world region whose track coordinates
+    (:func:`_bend_to_track`, signed ``curvature`` in 1/m) fall in ``box``: its part ahead of
+    midships is the straight box; its part behind is an annular sector about the turn's
+    centre, cut at :data:`MAX_SWEPT_ANGLE_RAD`. Conservative: every point the margin reaches
+    into the region passes (the test is the exact distance to the sector)."""
+    xi_min, xi_max, eta_min, eta_max = box
+    inside = np.zeros(np.broadcast(xi, eta, margin_m).shape, dtype=bool)
+    if xi_max >= 0.0:
+        inside |= _near_box(xi, eta, (max(xi_min, 0.0), xi_max, eta_min, eta_max), margin_m)
+    k, sign = abs(curvature), math.copysign(1.0, curvature)
+    radius = 1.0 / k
+    phi_lo, phi_hi = -min(xi_max, 0.0) * k, min(-xi_min * k, MAX_SWEPT_ANGLE_RAD)
+    # eta = sign·(R - rho): the sector's radii from the centre.
+    r_lo, r_hi = sorted((radius - sign * eta_min, radius - sign * eta_max))
+    if xi_min >= 0.0 or phi_lo > phi_hi or r_hi < 0.0:
+        return inside
+    r_lo = max(r_lo, 0.0)
+    # Coordinates (m) about the centre: along the centre-to-midships direction and along the
+    # direction the vessel came from; the swept angle is measured from the first to the second.
+    toward, back = radius - sign * eta, -xi
+    rho, phi = np.hypot(toward, back), np.arctan2(back, toward)
+    # Within the sector's angles the nearest sector point lies on the same ray ...
+    inside |= (
+        (phi >= phi_lo) & (phi <= phi_hi) & (rho >= r_lo - margin_m) & (rho <= r_hi + margin_m)
+    )
+    # ... else on one of its two straight edges (the arcs' ends lie on them).
+    for edge in (phi_lo, phi_hi):
+        along = toward * math.cos(edge) + back * math.sin(edge)
+        across = -toward * math.sin(edge) + back * math.cos(edge)
+        gap = np.clip(along, r_lo, r_hi) - along
+        inside |= gap * gap + across * across <= margin_m * margin_m
+    return inside
 
 
 class WakeField:
