@@ -1,6 +1,7 @@
 """Wakes of turning vessels (issue 17): the foam band and the Kelvin pattern follow the arc the
 vessel sailed (``MovingVessel.to_track_frame``), a straight course keeps exactly its old values,
-``foam_region`` still holds every foamy point, and a turn to starboard mirrors one to port."""
+``foam_region`` still holds every foamy point, a turn to starboard mirrors one to port, and the
+sequence's rate of turn reaches the sea (``Course.placement_at``, ``world.moving_vessels``)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import numpy as np
 import pytest
 
 from seahaze import vessels
+from seahaze.camera import Camera
 from seahaze.motion import Course
 from seahaze.ocean.base import cell_samples, smoothstep
 from seahaze.ocean.wake import (
@@ -21,6 +23,8 @@ from seahaze.ocean.wake import (
     ShipWaves,
     wake_foam_decay_s,
 )
+from seahaze.sceneio import parse_scene_text
+from seahaze.world import VesselInstance, frame_layout, moving_vessels
 
 TUG = dict(speed_m_s=9.0 * KNOT_M_S, length_m=30.0, beam_m=10.0, draft_m=4.0)
 """The encounter scene's tug: 9 kn, 30 m; turning at 1.5 deg/s it sails a circle of 177 m."""
@@ -229,3 +233,33 @@ def test_a_turn_rate_must_be_finite() -> None:
     for bad in (math.nan, math.inf, -math.inf):
         with pytest.raises(ValueError, match="turn rate"):
             MovingVessel(0.0, 0.0, 0.0, **TUG, turn_rate_deg_s=bad)
+
+
+def test_the_sequence_turn_rate_reaches_the_sea() -> None:
+    """A sequence frame's placements carry their course's rate of turn and the sea's vessels
+    get it; a still scene's placements keep 0."""
+    spec = parse_scene_text(
+        """\
+camera: {height_m: 12, resolution: [64, 36]}
+vessels:
+  placed:
+    - {class: passenger_ferry, distance_m: 260, bearing_deg: 3, heading_deg: 175,
+       length_m: 60, speed_kn: 20}
+    - {class: tug, distance_m: 150, bearing_deg: -10, heading_deg: 60, length_m: 25,
+       speed_kn: 10, turn_rate_deg_s: -2}
+sequence: {frames: 3, fps: 2}
+""",
+        "turning.yaml",
+    )
+    camera = Camera.from_spec(spec.camera)
+    placements, speeds = frame_layout(spec, camera, 1)
+    assert [p.turn_rate_deg_s for p in placements] == [0.0, -2.0]
+    still, _ = frame_layout(spec, camera, None)
+    assert [p.turn_rate_deg_s for p in still] == [0.0, 0.0]
+    instances = [
+        VesselInstance(i, p.kind, 0, p, p.length_m, 8.0, 10.0, 0.0, [], speed, 2.0)
+        for i, (p, speed) in enumerate(zip(placements, speeds, strict=True))
+    ]
+    sea = moving_vessels(instances)
+    assert [v.turn_rate_deg_s for v in sea] == [0.0, -2.0]
+    assert sea[1].curvature_per_m == pytest.approx(math.radians(-2.0) / (10 * KNOT_M_S))

@@ -81,7 +81,7 @@ class Course:
     ) -> vessels.Placement:
         """The vessel's :class:`~seahaze.vessels.Placement` at ``t_s`` (distance and bearing
         from the camera at ``camera_xy`` (m) recomputed; bearing relative to
-        ``camera_heading_deg``)."""
+        ``camera_heading_deg``; the course's rate of turn, for its wake)."""
         x, y, heading = self.pose(t_s)
         dx, dy = x - camera_xy[0], y - camera_xy[1]
         bearing = (math.degrees(math.atan2(dy, dx)) - camera_heading_deg + 180.0) % 360.0 - 180.0
@@ -92,6 +92,7 @@ class Course:
             heading_deg=heading,
             distance_m=math.hypot(dx, dy),
             bearing_deg=bearing,
+            turn_rate_deg_s=self.turn_rate_deg_s,
         )
 
 

@@ -255,7 +255,7 @@ def vessel_speeds(spec: SceneSpec, placements: Sequence[vessels.Placement]) -> l
 
 
 def moving_vessels(instances: Sequence[VesselInstance]) -> list[ocean.MovingVessel]:
-    """The vessels under way as the sea sees them (midships, heading, speed, hull size)."""
+    """The vessels under way as the sea sees them; a draftless user mesh: draft = beam / 10."""
     return [
         ocean.MovingVessel(
             v.placement.x,
@@ -264,8 +264,8 @@ def moving_vessels(instances: Sequence[VesselInstance]) -> list[ocean.MovingVess
             v.speed_m_s,
             v.length_m,
             v.beam_m,
-            # A user mesh may sit with no draft; a tenth of the beam stands in for its hull.
             v.hull_draft_m if v.hull_draft_m > 0.0 else 0.1 * v.beam_m,
+            v.placement.turn_rate_deg_s,  # a turning vessel's wake follows its arc
         )
         for v in instances
         if v.speed_m_s > 0.0

@@ -92,7 +92,9 @@ class Placement:
     and the length to build it with (``build_vessel(kind, length_m, rng)``).
 
     ``beam_m`` is set for a user mesh, whose beam is known before layout; the footprint then
-    uses it instead of the class's largest beam at that length.
+    uses it instead of the class's largest beam at that length. ``turn_rate_deg_s`` is the rate
+    of turn (deg/s, counter-clockwise positive) of the course a sequence frame's vessel sails
+    (:meth:`seahaze.motion.Course.placement_at`; its wake follows the arc); 0 for a still.
     """
 
     kind: str
@@ -103,6 +105,7 @@ class Placement:
     distance_m: float
     bearing_deg: float
     beam_m: float | None = None
+    turn_rate_deg_s: float = 0.0
 
 
 class PlacedPart(NamedTuple):
