@@ -6,7 +6,7 @@
   i.e. the per-level sampling it replaces), within noise measured over seeds; grey and ``kim``.
 * The clean member equals Mitsuba's clean render (``volpath`` without haze) within noise.
 * Common random numbers: near the camera at V = 4000 m, where transmittance is ~1, the hazy
-  image's per-pixel error follows the clean image's (correlation >= 0.3; ~0 if independent).
+  image's per-pixel error follows the clean image's (correlation >= 0.5; ~0 if independent).
 * Levels split over several passes (a bounded film) give the same images, the clean one
   bit-identical.
 """
@@ -188,10 +188,10 @@ def test_hazy_noise_follows_the_clean_noise_near_the_camera() -> None:
     clean_error = (noisy.clean - converged.clean)[near_sea].ravel()
     hazy_error = (noisy.levels[0] - converged.levels[0])[near_sea].ravel()
     correlation = np.corrcoef(clean_error, hazy_error)[0, 1]
-    # 0.69 with the independent sampler; stratified (multijitter) and with the sun and sky
-    # sampled apart, the shared surface noise fell 2-fold and the level's own in-scattering
-    # noise is a larger part of its error: measured 0.37.
-    assert correlation >= 0.3, correlation
+    # The issue's criterion. Measured 0.69-0.71 (seeds 3-5); 0.37-0.41 before the sun's
+    # aureole was sampled from the surfaces (the sea's BSDF samples alone found it rarely, and
+    # that noise belongs to the level alone).
+    assert correlation >= 0.5, correlation
     # Independent renders (another seed for the hazy image) would not correlate at all.
     other = renderer.render(sigmas, 0.998, 0.75, 16, 4)
     independent = np.corrcoef(

@@ -26,7 +26,8 @@ the next surface or out to the sky), for each level ``k`` of extinction ``σ_k``
   sampling by the power heuristic for its own density (Veach 1997, §9.2, one sample per
   strategy): ``sunsky`` draws one direction from a mixture (61 % sun, 39 % sky on the default
   scene), so a sunlit hull got the sun in only some samples, the largest source of its noise
-  (docs/benchmarks.md, "Ground-truth noise").
+  (docs/benchmarks.md, "Ground-truth noise"). The sun's aureole in the haze is sampled from
+  each surface too (:meth:`sample_aureole`), against the BSDF sample's unshadowed sun.
 
 The surfaces a path meets, its BSDF samples and its shadow rays do not depend on the haze, so
 they are drawn once: the clean image (the path without haze) and every level come from the
@@ -297,29 +298,68 @@ def make_integrator(
                 pdf += self.mix_weight[k] * sg * dr.exp(-sg * s) / dr.maximum(norm, 1e-30)
             return s, pdf
 
-        def inscatter(self, scene, sampler, ray, enter, length, weight, att, res, active):
-            """Add every level's in-scattering along ``ray`` over ``[enter, enter + length]``
-            (``weight``: the path throughput, None on the camera segment; ``att``: each level's
-            transmittance so far). See the module docstring."""
-            beta = mi.Color3f(1.0) if weight is None else weight
-            # One sun direction per segment, shared by every level.
+        def sun_source(self, sampler, ray, enter, active):
+            """One sun direction at the segment's slab entry, shared by every level: the
+            direction, whether the sun lights the haze, and its single-scattering source toward
+            ``-ray.d`` per unit extinction (irradiance × phase × albedo)."""
             it = dr.zeros(mi.Interaction3f)
             it.p, it.t, it.time, it.wavelengths = ray(enter), 0.0, ray.time, ray.wavelengths
             ds, em_weight = self.sun.sample_direction(it, sampler.next_2d(active), active)
-            mu_sun = ds.d.z
-            lit = active & (ds.pdf > 0) & (mu_sun > 0.0)
+            lit = active & (ds.pdf > 0) & (ds.d.z > 0.0)
             phase = jit_haze.hg_phase(dr.dot(ds.d, ray.d), self.g)
-            sun = dr.select(lit, em_weight * phase * self.albedo, 0.0)  # per unit extinction
+            return ds, lit, dr.select(lit, em_weight * phase * self.albedo, 0.0)
+
+        def sun_unshadowed(self, k, source, ray, enter, length, mu_sun):
+            """Level ``k``'s unshadowed sun single scattering over the segment (closed form)."""
+            sigma = self.sigma[k] if not self.grey else self.sigma[k].y
+            z_entry = ray.o.z + enter * ray.d.z
+            return source * sigma * self.sun_integral(sigma, z_entry, ray.d.z, mu_sun, length)
+
+        def aureole_pdf(self, d):
+            """Solid-angle density of :meth:`sample_aureole`'s directions."""
+            return jit_haze.hg_phase(dr.dot(self.sun_axis, d), self.g)
+
+        def sample_aureole(self, scene, sampler, si, bsdf, ctx, beta, att, res, active):
+            """The sun's single scattering in the haze as a light seen from a surface: one
+            direction drawn from the phase function around the sun, weighted against BSDF
+            sampling by the power heuristic. The aureole is broad and bright (the HG peak is
+            125× its side at g = 0.75), and a glossy sea's BSDF samples found it rarely: it was
+            most of a level's own noise near the camera (docs/physics.md, "The aureole")."""
+            cos_t = jit_haze.hg_sample_cos(sampler.next_1d(active), self.g)
+            phi = 2.0 * dr.pi * sampler.next_1d(active)
+            axis = (self.sun_axis.x, self.sun_axis.y, self.sun_axis.z)
+            d = mi.Vector3f(*jit_haze.rotate_directions(axis, cos_t, phi))
+            pdf = self.aureole_pdf(d)
+            value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(d), active)
+            active = active & (pdf > 0.0) & dr.any(value != 0.0)
+            ray = si.spawn_ray(d)
+            hit = scene.ray_intersect_preliminary(ray, active)
+            enter, length = self.slab_length(ray.o, d, dr.select(hit.is_valid(), hit.t, dr.inf))
+            active &= length > 0.0
+            ds, lit, source = self.sun_source(sampler, ray, enter, active)
+            weight = beta * value * _mis(pdf, bsdf_pdf) / dr.maximum(pdf, 1e-30)
+            for k in range(self.n_levels):
+                sun = self.sun_unshadowed(k, source, ray, enter, length, ds.d.z)
+                res[k] += dr.select(lit, att[k] * weight * sun, 0.0)
+
+        def inscatter(self, scene, sampler, ray, enter, length, weight, att, res, active, sun_mis):
+            """Add every level's in-scattering along ``ray`` over ``[enter, enter + length]``
+            (``weight``: the path throughput, None on the camera segment; ``att``: each level's
+            transmittance so far; ``sun_mis``: the weight of the unshadowed sun against
+            :meth:`sample_aureole` at the surface the segment left). See the module
+            docstring."""
+            beta = mi.Color3f(1.0) if weight is None else weight
+            ds, lit, sun = self.sun_source(sampler, ray, enter, active)
+            mu_sun = ds.d.z
             z_entry = ray.o.z + enter * ray.d.z
             tables = self.diffuse(-ray.d)
             # Stratified, and the same for every level (common random numbers).
             n_points = self.camera_points if weight is None else 1
             us = [(i + sampler.next_1d(active)) / n_points for i in range(n_points)]
             for k in range(self.n_levels):
-                sigma = self.sigma[k] if not self.grey else self.sigma[k].y
                 # Unshadowed sun: transmittance to the point and on to the sun are both
                 # exponential in s, so their product integrates in closed form.
-                sun_k = sigma * self.sun_integral(sigma, z_entry, ray.d.z, mu_sun, length)
+                sun_k = self.sun_unshadowed(k, sun, ray, enter, length, mu_sun) * sun_mis
                 # The diffuse field: distances drawn from the level's own transmittance.
                 sg = self.sigma[k].y
                 mass = _one_minus_exp(sg * length)
@@ -330,7 +370,7 @@ def make_integrator(
                     if not self.grey:  # distances follow green; reweight R and B
                         value = value * dr.exp(-(self.sigma[k] - sg) * s)
                     diffuse += value
-                source = sun * sun_k + (mass / (sg * n_points)) * diffuse
+                source = sun_k + (mass / (sg * n_points)) * diffuse
                 res[k] += dr.select(active, att[k] * beta * source, 0.0)
             # The shadow correction: one shared point and shadow ray.
             s, pdf = self.mixture_distance(sampler.next_1d(active), length)
@@ -374,16 +414,19 @@ def make_integrator(
                 t_end = dr.select(si.is_valid(), si.t, dr.inf)
                 enter, length = self.slab_length(ray.o, ray.d, t_end)
                 segment = [self.transmittance(k, length) for k in range(self.n_levels)]
+                sun_mis = dr.select(prev_delta, 1.0, _mis(prev_pdf, self.aureole_pdf(ray.d)))
+                weight = None if depth == 0 else beta
                 self.inscatter(
                     scene,
                     sampler,
                     ray,
                     enter,
                     length,
-                    None if depth == 0 else beta,
+                    weight,
                     att,
                     res,
                     active & (length > 0.0),
+                    sun_mis,
                 )
 
                 # The sky and the sun at the end of an escaping segment, each with MIS against
@@ -428,6 +471,8 @@ def make_integrator(
                     for k in range(self.n_levels):
                         lit = att[k] * self.transmittance(k, e_length) * direct
                         res[k] += dr.select(drawn, lit, 0.0)
+
+                self.sample_aureole(scene, sampler, si, bsdf, ctx, beta, att, res, smooth)
 
                 # Continue along a BSDF sample.
                 bs, bsdf_weight = bsdf.sample(
