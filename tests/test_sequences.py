@@ -70,12 +70,13 @@ def _spec(text: str = TINY) -> SceneSpec:
     return parse_scene_text(text, "tiny.yaml")
 
 
-def _sampled(encounter: str, seed: int, count: int = 5) -> SceneSpec:
+def _sampled(encounter: str, seed: int, count: int = 5, encounters: int = 1) -> SceneSpec:
+    sequence = {"frames": 100, "fps": 10, "encounter": encounter, "encounters": encounters}
     return SceneSpec.model_validate(
         {
             "camera": {"height_m": 15},
             "vessels": {"sample": {"count": count, "distance_m": [200, 3000]}},
-            "sequence": {"frames": 100, "fps": 10, "encounter": encounter},
+            "sequence": sequence,
             "render": {"seed": seed},
         }
     )
@@ -232,15 +233,11 @@ def _min_gap(a, b, times) -> float:
     return min(math.dist(a.pose(t)[:2], b.pose(t)[:2]) for t in times)
 
 
-@pytest.mark.parametrize("encounter", ["crossing", "head_on", "overtaking"])
-@pytest.mark.parametrize("seed", [4, 5])
-def test_encounters_have_their_geometry_and_pass_clear(encounter, seed):
-    spec = _sampled(encounter, seed, count=4)
-    camera = Camera.from_spec(spec.camera)
-    placements = layout_vessels(spec, camera)
-    courses = plan_courses(spec, placements, vessel_speeds(spec, placements))
-    # The first two vessels that can move (buoys are moored) meet.
-    a, b = [c for c in courses if vessels.get_class(c.placement.kind).service_speed_kn[1] > 0][:2]
+def _movers(courses):
+    return [c for c in courses if vessels.get_class(c.placement.kind).service_speed_kn[1] > 0]
+
+
+def _assert_encounter(a, b, encounter):
     turn = (b.placement.heading_deg - a.placement.heading_deg + 180.0) % 360.0 - 180.0
     if encounter == "head_on":
         assert abs(abs(turn) - 180.0) <= 10.0 + 1e-9
@@ -262,6 +259,47 @@ def test_encounters_have_their_geometry_and_pass_clear(encounter, seed):
         for c in (a, b)
     )
     assert min(gaps) >= half_diagonals + 15.0 - 1e-6
+
+
+@pytest.mark.parametrize("encounter", ["crossing", "head_on", "overtaking"])
+@pytest.mark.parametrize("seed", [4, 5])
+def test_encounters_have_their_geometry_and_pass_clear(encounter, seed):
+    spec = _sampled(encounter, seed, count=4)
+    camera = Camera.from_spec(spec.camera)
+    placements = layout_vessels(spec, camera)
+    courses = plan_courses(spec, placements, vessel_speeds(spec, placements))
+    # The first two vessels that can move (buoys are moored) meet.
+    a, b = _movers(courses)[:2]
+    _assert_encounter(a, b, encounter)
+
+
+@pytest.mark.parametrize("encounter", ["crossing", "head_on"])
+def test_several_encounters_pair_the_vessels_under_way(encounter):
+    kept = 0
+    for seed in range(4, 10):
+        spec = _sampled(encounter, seed, count=7, encounters=2)
+        camera = Camera.from_spec(spec.camera)
+        placements = layout_vessels(spec, camera)
+        courses = plan_courses(spec, placements, vessel_speeds(spec, placements))
+        assert first_conflict(courses, frame_times(spec.sequence)) is None
+        movers = _movers(courses)
+        assert all(c.encounter is None for c in courses if c not in movers[:4])
+        for a, b in ((movers[0], movers[1]), (movers[2], movers[3])):
+            # A pair one of whose vessels had to give way to another pair is no encounter.
+            assert a.encounter == b.encounter
+            if a.encounter is not None:
+                assert a.encounter == encounter
+                _assert_encounter(a, b, encounter)
+                kept += 1
+    assert kept >= 9  # of 12 pairs: giving way is the exception
+
+
+def test_more_encounters_than_vessels_under_way_is_a_clear_error():
+    spec = _sampled("crossing", 4, count=3, encounters=3)
+    camera = Camera.from_spec(spec.camera)
+    placements = layout_vessels(spec, camera)
+    with pytest.raises(MotionError, match=r"3 encounter.*need 6 vessels that can move"):
+        plan_courses(spec, placements, vessel_speeds(spec, placements))
 
 
 @pytest.mark.parametrize("seed", range(6))

@@ -8,7 +8,10 @@ has no current, so speed through the water is speed over ground.
 
 An ``encounter`` moves the second vessel under way so that it passes the first at the
 reference time at a drawn closest point of approach (CPA) no less than half the sum of the two
-footprint diagonals plus 15..60 m: two straight courses at that CPA never meet. Then every
+footprint diagonals plus 15..60 m: two straight courses at that CPA never meet. With
+``encounters: n`` the 3rd and 4th vessels under way meet the same way, and so on for ``n``
+pairs. A sampled vessel of an encounter that has to give way (below) leaves it: its and its
+partner's ``encounter`` become None. Then every
 frame is checked: a sampled vessel whose course meets an earlier one's, or passes over the
 camera (or meets the own ship of a ``ship`` platform, which sails from the camera's place at
 mid-sequence), gives way (a new heading drawn from :data:`seahaze.seeds.Stream.MOTION`, then
@@ -255,15 +258,19 @@ def plan_courses(
         for p, v, r in zip(placements, speeds, turns, strict=True)
     ]
     rng = stream_rng(spec.render.seed, Stream.MOTION)
+    partner: dict[int, int] = {}
     if sequence.encounter != "none":
         movers = [i for i, c in enumerate(courses) if _speed_range(c.placement.kind)[1] > 0.0]
-        if len(movers) < 2:
+        pairs = sequence.encounters
+        if len(movers) < 2 * pairs:
             raise MotionError(
-                f"encounter {sequence.encounter} needs two vessels that can move, the scene "
-                f"has {len(movers)}; allowed: encounter none, or add vessels"
+                f"{pairs} encounter(s) {sequence.encounter} need {2 * pairs} vessels that can "
+                f"move, the scene has {len(movers)}; allowed: encounter none, fewer "
+                "encounters, or add vessels"
             )
-        a, b = movers[:2]
-        courses[a], courses[b], _ = _encounter(sequence.encounter, courses[a], courses[b], rng)
+        for a, b in zip(movers[0 : 2 * pairs : 2], movers[1 : 2 * pairs : 2], strict=True):
+            courses[a], courses[b], _ = _encounter(sequence.encounter, courses[a], courses[b], rng)
+            partner[a], partner[b] = b, a
     times = frame_times(sequence)
     own = own_course(spec)
     for i in range(len(courses)):
@@ -281,6 +288,9 @@ def plan_courses(
             tries += 1
         if conflict is not None:
             raise MotionError(_describe_conflict(courses, conflict))
+        if tries and i in partner:  # it gave way: no longer on its encounter's course
+            for j in (i, partner[i]):
+                courses[j] = replace(courses[j], encounter=None)
     return courses
 
 

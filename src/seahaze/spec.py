@@ -804,11 +804,14 @@ class SequenceSpec(_Spec):
         return self
 
     @model_serializer(mode="wrap")
-    def _omit_level_mount(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
-        # A level mount's recorded config stays byte-identical to before mounts existed.
+    def _omit_defaults_added_later(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # A level mount and one encounter keep a recorded config byte-identical to before
+        # these fields existed.
         data = handler(self)
         if self.camera_mount == "level":
             data.pop("camera_mount", None)
+        if self.encounters == 1:
+            data.pop("encounters", None)
         return data
 
     encounter: Literal["none", "crossing", "head_on", "overtaking", "random"] = Field(
@@ -819,6 +822,22 @@ class SequenceSpec(_Spec):
         "speeds: the faster class at its top speed, the other at 0.6 of that or its class's "
         "lowest); `random` draws one of the three from the seed.",
     )
+    encounters: int = Field(
+        1,
+        ge=1,
+        le=8,
+        description="How many encounters `encounter` sets up: between the 1st and 2nd vessels "
+        "that can move, then the 3rd and 4th, and so on (`random` draws each pair's kind).",
+    )
+
+    @model_validator(mode="after")
+    def _encounter_pairs(self) -> SequenceSpec:
+        if self.encounters > 1 and self.encounter == "none":
+            raise ValueError(
+                f"encounters {self.encounters} needs an encounter kind; allowed: encounter "
+                "crossing, head_on, overtaking or random, or leave encounters out"
+            )
+        return self
 
     @property
     def duration_s(self) -> float:
