@@ -30,7 +30,8 @@ def test_sun_cone_sampling_integrates_the_sun_disk() -> None:
     import drjit as dr
     import mitsuba as mi
 
-    from seahaze.render.haze_integrator import SUN_APERTURE_DEG, make_integrator, sun_axis
+    from seahaze.render.haze_integrator import make_integrator
+    from seahaze.render.sun_disk import SUN_APERTURE_DEG, disk_irradiance, sun_axis
 
     spec = small_spec(sun={"elevation_deg": 28.0, "azimuth_deg": 150.0})
     sun = mi.load_dict(sunsky_dict(spec, sky=False))
@@ -63,6 +64,8 @@ def test_sun_cone_sampling_integrates_the_sun_disk() -> None:
     quadrature = float(np.sum(radiance.reshape(rr.shape) * area))
     assert quadrature > 0.1
     assert abs(estimate - quadrature) <= 4.0 * stderr + 2e-3 * quadrature, (estimate, quadrature)
+    # The irradiance the haze's single scattering uses: the same integral on a stratified grid.
+    assert disk_irradiance(sun)[1] == pytest.approx(quadrature, rel=2e-3)
     # Every sample lies in the cone and the disk fills all but a thin rim of it.
     assert np.mean(green > 0.0) > 0.97
 

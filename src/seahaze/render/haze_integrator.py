@@ -46,6 +46,7 @@ import numpy as np
 
 from ..haze import HAZE_BOTTOM_M
 from . import jit_haze
+from .sun_disk import disk_irradiance, sun_axis, sun_cone_cos
 
 DEFAULT_BOUNCES = 3
 """Surface interactions per camera path: sea → sky, vessel → sea → sky. Measured on the
@@ -56,41 +57,12 @@ TINY_OPTICAL_DEPTH = 1e-3
 """Below this, ``1 − e^{−τ}`` is evaluated as ``τ (1 − τ/2)`` (float32 cancellation)."""
 
 
-SUN_APERTURE_DEG = 0.5358
-"""Angular diameter (deg) of Mitsuba's ``sunsky`` sun disk (its ``sun_aperture`` default)."""
-
-
 def opaque_scalar(value: float) -> Any:
     """A drjit Float kernel parameter (not a literal baked into the kernel)."""
     import drjit as dr
     import mitsuba as mi
 
     return dr.opaque(mi.Float, float(value))
-
-
-def sun_cone_cos() -> float:
-    """Cosine of the half-angle of the cone the sun is sampled in: sunsky's disk, widened by
-    :data:`SUN_CONE_ULPS` float32 steps so that it holds the whole disk however sunsky rounds
-    its own edge (directions outside the disk have no radiance, so a wider cone only wastes a
-    few samples; a narrower one would lose the limb). A float32 value, so that the density
-    ``1 / (2π (1 − cos))`` is that of the cone the kernel samples."""
-    c = np.float32(np.cos(np.radians(0.5 * SUN_APERTURE_DEG)))
-    for _ in range(SUN_CONE_ULPS):
-        c = np.nextafter(c, np.float32(0.0))
-    return float(c)
-
-
-SUN_CONE_ULPS = 4
-"""float32 steps (6e-8 each, 0.5 % of the disk's ``1 − cos``) the sampled cone is widened by."""
-
-
-def sun_axis(sun: Any) -> np.ndarray:
-    """Unit direction (3,) toward the centre of the sun of a ``sunsky`` emitter, world frame."""
-    import mitsuba as mi
-
-    d = mi.traverse(sun)["sun_direction"]
-    axis = np.array([float(d.x[0]), float(d.y[0]), float(d.z[0])])
-    return axis / np.linalg.norm(axis)
 
 
 def _mis(pdf_a: Any, pdf_b: Any) -> Any:
@@ -183,6 +155,7 @@ def make_integrator(
             cos_max = sun_cone_cos()
             self.sun_cos = opaque_scalar(cos_max)
             self.sun_pdf = opaque_scalar(1.0 / (2.0 * np.pi * (1.0 - cos_max)))
+            self.sun_irradiance = mi.Color3f(*(opaque_scalar(c) for c in disk_irradiance(sun)))
             self.top, self.bottom = top_m, HAZE_BOTTOM_M
             self.set_levels(
                 np.full((n_levels, 3), 1e-3),
@@ -298,16 +271,15 @@ def make_integrator(
                 pdf += self.mix_weight[k] * sg * dr.exp(-sg * s) / dr.maximum(norm, 1e-30)
             return s, pdf
 
-        def sun_source(self, sampler, ray, enter, active):
-            """One sun direction at the segment's slab entry, shared by every level: the
-            direction, whether the sun lights the haze, and its single-scattering source toward
-            ``-ray.d`` per unit extinction (irradiance × phase × albedo)."""
-            it = dr.zeros(mi.Interaction3f)
-            it.p, it.t, it.time, it.wavelengths = ray(enter), 0.0, ray.time, ray.wavelengths
-            ds, em_weight = self.sun.sample_direction(it, sampler.next_2d(active), active)
-            lit = active & (ds.pdf > 0) & (ds.d.z > 0.0)
-            phase = jit_haze.hg_phase(dr.dot(ds.d, ray.d), self.g)
-            return ds, lit, dr.select(lit, em_weight * phase * self.albedo, 0.0)
+        def sun_source(self, sampler, active, travel):
+            """One direction uniform in the sun's disk, shared by every level, whether the sun
+            lights the haze from it, and its single-scattering source toward ``-travel`` per
+            unit extinction: the disk's irradiance × phase × albedo (sun_disk module)."""
+            local = mi.warp.square_to_uniform_cone(sampler.next_2d(active), self.sun_cos)
+            d = mi.Frame3f(self.sun_axis).to_world(local)
+            lit = active & (d.z > 0.0)
+            phase = jit_haze.hg_phase(dr.dot(d, travel), self.g)
+            return d, lit, dr.select(lit, self.sun_irradiance * phase * self.albedo, 0.0)
 
         def sun_unshadowed(self, k, source, ray, enter, length, mu_sun):
             """Level ``k``'s unshadowed sun single scattering over the segment (closed form)."""
@@ -336,10 +308,10 @@ def make_integrator(
             hit = scene.ray_intersect_preliminary(ray, active)
             enter, length = self.slab_length(ray.o, d, dr.select(hit.is_valid(), hit.t, dr.inf))
             active &= length > 0.0
-            ds, lit, source = self.sun_source(sampler, ray, enter, active)
+            sun_d, lit, source = self.sun_source(sampler, active, d)
             weight = beta * value * _mis(pdf, bsdf_pdf) / dr.maximum(pdf, 1e-30)
             for k in range(self.n_levels):
-                sun = self.sun_unshadowed(k, source, ray, enter, length, ds.d.z)
+                sun = self.sun_unshadowed(k, source, ray, enter, length, sun_d.z)
                 res[k] += dr.select(lit, att[k] * weight * sun, 0.0)
 
         def inscatter(self, scene, sampler, ray, enter, length, weight, att, res, active, sun_mis):
@@ -349,8 +321,8 @@ def make_integrator(
             :meth:`sample_aureole` at the surface the segment left). See the module
             docstring."""
             beta = mi.Color3f(1.0) if weight is None else weight
-            ds, lit, sun = self.sun_source(sampler, ray, enter, active)
-            mu_sun = ds.d.z
+            sun_d, lit, sun = self.sun_source(sampler, active, ray.d)
+            mu_sun = sun_d.z
             z_entry = ray.o.z + enter * ray.d.z
             tables = self.diffuse(-ray.d)
             # Stratified, and the same for every level (common random numbers).
@@ -375,7 +347,7 @@ def make_integrator(
             # The shadow correction: one shared point and shadow ray.
             s, pdf = self.mixture_distance(sampler.next_1d(active), length)
             x = ray(enter + s)
-            shadow = mi.Ray3f(x, ds.d, ray.time, ray.wavelengths)
+            shadow = mi.Ray3f(x, sun_d, ray.time, ray.wavelengths)
             shaded = lit & scene.ray_test(shadow, lit)
             sun_length = dr.maximum(self.top - x.z, 0.0) / dr.maximum(mu_sun, 1e-6)
             scale = beta * sun / dr.maximum(pdf, 1e-30)
