@@ -201,12 +201,17 @@ def make_integrator(
             self.grid = fine.shape[1:4]  # (n_mu, n_phi, n_z fine)
             self.table = mi.Float(fine.ravel())
 
+        def sun_cone_direction(self, u: Any) -> Any:
+            """The direction uniform in the cone around the sun's axis for uniform ``u`` (2-D):
+            the sun's disk and a few float32 steps of rim (sun_disk module)."""
+            local = mi.warp.square_to_uniform_cone(u, self.sun_cos)
+            return mi.Frame3f(self.sun_axis).to_world(local)
+
         def sample_sun(self, it: Any, u: Any, active: Any) -> tuple[Any, Any]:
             """A direction uniform in the sun's disk (no visibility test) and its radiance
             over its solid-angle density, as ``Emitter.sample_direction`` returns them."""
-            local = mi.warp.square_to_uniform_cone(u, self.sun_cos)
             ds = dr.zeros(mi.DirectionSample3f)
-            ds.d = mi.Frame3f(self.sun_axis).to_world(local)
+            ds.d = self.sun_cone_direction(u)
             ds.pdf = dr.select(active, self.sun_pdf, 0.0)
             ds.delta = mi.Bool(False)
             radiance = self.sun.eval_direction(it, ds, active)
@@ -275,8 +280,7 @@ def make_integrator(
             """One direction uniform in the sun's disk, shared by every level, whether the sun
             lights the haze from it, and its single-scattering source toward ``-travel`` per
             unit extinction: the disk's irradiance × phase × albedo (sun_disk module)."""
-            local = mi.warp.square_to_uniform_cone(sampler.next_2d(active), self.sun_cos)
-            d = mi.Frame3f(self.sun_axis).to_world(local)
+            d = self.sun_cone_direction(sampler.next_2d(active))
             lit = active & (d.z > 0.0)
             phase = jit_haze.hg_phase(dr.dot(d, travel), self.g)
             return d, lit, dr.select(lit, self.sun_irradiance * phase * self.albedo, 0.0)
