@@ -40,6 +40,7 @@ not literals: the kernel is compiled once per number of levels and reused for ev
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -47,6 +48,7 @@ import numpy as np
 from ..haze import HAZE_BOTTOM_M
 from . import jit_haze
 from .sun_disk import disk_irradiance, sun_axis, sun_cone_cos
+from .table_texture import TableTexture
 
 DEFAULT_BOUNCES = 3
 """Surface interactions per camera path: sea → sky, vessel → sea → sky. Measured on the
@@ -73,40 +75,6 @@ def _mis(pdf_a: Any, pdf_b: Any) -> Any:
     return dr.detach(dr.select(pdf_a > 0, a2 / (a2 + pdf_b * pdf_b), 0.0))
 
 
-Z_UPSAMPLE = 4
-"""Height bins of the integrator's tables per bin of the traced ones."""
-
-
-def upsampled_tables(tables: np.ndarray, n_levels: int) -> np.ndarray:
-    """Tables (n_z, n_mu, n_phi, 3L) as (L, n_mu, n_phi, n_z × Z_UPSAMPLE, 3), linearly
-    interpolated in height at the fine bins' centres (clamped at the ends, like a texture), so a
-    nearest-bin lookup is within an eighth of a traced bin of linear interpolation at half the
-    memory reads."""
-    n_z = tables.shape[0]
-    fine = (np.arange(n_z * Z_UPSAMPLE) + 0.5) / Z_UPSAMPLE - 0.5  # in coarse texel units
-    low = np.clip(np.floor(fine), 0, n_z - 1).astype(int)
-    high = np.clip(low + 1, 0, n_z - 1)
-    f = np.clip(fine - low, 0.0, 1.0)[:, None, None, None]
-    up = (1.0 - f) * tables[low] + f * tables[high]
-    per_level = up.reshape(n_z * Z_UPSAMPLE, *tables.shape[1:3], n_levels, 3)
-    return np.ascontiguousarray(per_level.transpose(3, 1, 2, 0, 4), dtype=np.float32)
-
-
-def _linear_taps(u: Any, n: int) -> list[tuple[Any, Any]]:
-    """The two texels and weights of linear interpolation at coordinate ``u`` in ``[0, 1]`` of
-    an ``n``-texel axis with clamped edges (texel centres at ``(i + 0.5)/n``, as drjit's
-    textures)."""
-    import drjit as dr
-    import mitsuba as mi
-
-    x = u * n - 0.5
-    i0 = dr.floor(x)
-    f = x - i0
-    low = mi.UInt32(dr.clip(i0, 0, n - 1))
-    high = mi.UInt32(dr.clip(i0 + 1.0, 0, n - 1))
-    return [(low, 1.0 - f), (high, f)]
-
-
 def _padded(values: np.ndarray) -> Any:
     """A drjit Float array of ``values`` plus one trailing zero (never a one-element array)."""
     import mitsuba as mi
@@ -119,6 +87,43 @@ def _one_minus_exp(tau: Any) -> Any:
     import drjit as dr
 
     return dr.select(tau < TINY_OPTICAL_DEPTH, tau * (1.0 - 0.5 * tau), 1.0 - dr.exp(-tau))
+
+
+@dataclass
+class _Path:
+    """What a camera path carries from one segment to the next (drjit values; a dataclass is
+    a drjit pytree, so it can be the state of a symbolic loop)."""
+
+    ray: Any
+    active: Any
+    depth: Any
+    beta: Any
+    clean: Any
+    res: list
+    """Each level's radiance so far."""
+    att: list
+    """Each level's transmittance from the camera to the path's current vertex."""
+    prev_si: Any
+    prev_pdf: Any
+    prev_delta: Any
+
+    @classmethod
+    def start(cls, ray: Any, active: Any, n_levels: int) -> _Path:
+        import drjit as dr
+        import mitsuba as mi
+
+        return cls(
+            ray=ray,
+            active=active,
+            depth=mi.UInt32(0),
+            beta=mi.Color3f(1.0),
+            clean=mi.Color3f(0.0),
+            res=[mi.Color3f(0.0) for _ in range(n_levels)],
+            att=[mi.Color3f(1.0) for _ in range(n_levels)],
+            prev_si=dr.zeros(mi.SurfaceInteraction3f),
+            prev_pdf=mi.Float(1.0),
+            prev_delta=mi.Bool(True),
+        )
 
 
 def make_integrator(
@@ -197,9 +202,7 @@ def make_integrator(
             dr.make_opaque(self.sigma_g, self.mix_start, self.mix_width)
             self.albedo, self.g = opaque(albedo), opaque(g)
             self.sun_azimuth = opaque(sun_azimuth_rad)
-            fine = upsampled_tables(tables, self.n_levels)
-            self.grid = fine.shape[1:4]  # (n_mu, n_phi, n_z fine)
-            self.table = mi.Float(fine.ravel())
+            self.table = TableTexture(tables, self.n_levels)
 
         def sun_cone_direction(self, u: Any) -> Any:
             """The direction uniform in the cone around the sun's axis for uniform ``u`` (2-D):
@@ -230,31 +233,6 @@ def make_integrator(
             if self.grey:
                 return mi.Color3f(dr.exp(-self.sigma[k].y * length))
             return dr.exp(-self.sigma[k] * length)
-
-        def diffuse(self, travel: Any) -> Any:
-            """A function ``(level, z / top) → RGB`` of the diffuse in-scattering toward travel
-            direction ``travel``: bilinear in direction (weights computed once per segment for
-            every level and height) and nearest in height on tables upsampled
-            :data:`Z_UPSAMPLE` times by linear interpolation (:func:`upsampled_tables`)."""
-            n_mu, n_phi, n_z = self.grid
-            phi = dr.atan2(travel.y, travel.x) - self.sun_azimuth
-            phi = dr.abs(dr.atan2(dr.sin(phi), dr.cos(phi)))
-            corners = [
-                (wm * wp, (im * n_phi + ip) * n_z)
-                for im, wm in _linear_taps((travel.z + 1.0) * 0.5, n_mu)
-                for ip, wp in _linear_taps(phi / dr.pi, n_phi)
-            ]
-
-            def lookup(level: int, height: Any) -> Any:
-                iz = mi.UInt32(dr.clip(dr.floor(height * n_z), 0, n_z - 1))
-                value = mi.Color3f(0.0)
-                for weight, offset in corners:
-                    texel = (level * n_mu * n_phi * n_z + offset + iz) * 3
-                    rgb = [dr.gather(mi.Float, self.table, texel + c) for c in range(3)]
-                    value += weight * mi.Color3f(*rgb)
-                return value
-
-            return lookup
 
         def mixture_distance(self, u: Any, length: Any) -> tuple[Any, Any]:
             """A distance in ``[0, length]`` from the levels' mixture for uniform ``u``, and the
@@ -328,7 +306,7 @@ def make_integrator(
             sun_d, lit, sun = self.sun_source(sampler, active, ray.d)
             mu_sun = sun_d.z
             z_entry = ray.o.z + enter * ray.d.z
-            tables = self.diffuse(-ray.d)
+            tables = self.table.toward(-ray.d, self.sun_azimuth)
             # Stratified, and the same for every level (common random numbers).
             n_points = self.camera_points if weight is None else 1
             us = [(i + sampler.next_1d(active)) / n_points for i in range(n_points)]
@@ -373,98 +351,97 @@ def make_integrator(
 
         # -- the path ---------------------------------------------------------------------
         def sample(self, scene, sampler, ray, medium=None, active=True):
-            ray = mi.Ray3f(ray)
-            active = mi.Bool(active)
-            clean = mi.Color3f(0.0)
-            res = [mi.Color3f(0.0) for _ in range(self.n_levels)]
-            att = [mi.Color3f(1.0) for _ in range(self.n_levels)]
-            beta = mi.Color3f(1.0)
-            prev_si = dr.zeros(mi.SurfaceInteraction3f)
-            prev_pdf = mi.Float(1.0)
-            prev_delta = mi.Bool(True)
+            path = _Path.start(mi.Ray3f(ray), mi.Bool(active), self.n_levels)
+            # The camera segment is unrolled (it takes CAMERA_POINTS in-scattering points);
+            # later ones run in a loop that a packet of lanes leaves once all its paths have
+            # ended: most end at the sky after one or two segments, and an unrolled kernel
+            # paid for every bounce of every lane.
+            self.bounce(scene, sampler, path, camera=True)
+
+            def body(path, sampler):
+                self.bounce(scene, sampler, path, camera=False)
+                return path, sampler
+
+            with dr.scoped_set_flag(dr.JitFlag.OptimizeLoops, False):
+                path, sampler = dr.while_loop(
+                    (path, sampler), lambda path, sampler: path.active, body, label="haze_path"
+                )
+            aovs = [c for r in path.res for c in (r.x, r.y, r.z)]
+            return mi.Spectrum(path.clean), mi.Bool(True), aovs
+
+        def bounce(self, scene, sampler, p, camera):
+            """One segment of path ``p`` (a :class:`_Path`, updated in place): the haze along
+            it, the sky where it escapes, and at the surface it meets the lights and the next
+            direction (up to ``bounces`` surfaces)."""
+            si = scene.ray_intersect(p.ray, p.active)
+            t_end = dr.select(si.is_valid(), si.t, dr.inf)
+            enter, length = self.slab_length(p.ray.o, p.ray.d, t_end)
+            segment = [self.transmittance(k, length) for k in range(self.n_levels)]
+            sun_mis = dr.select(p.prev_delta, 1.0, _mis(p.prev_pdf, self.aureole_pdf(p.ray.d)))
+            weight = None if camera else p.beta
+            in_haze = p.active & (length > 0.0)
+            self.inscatter(
+                scene, sampler, p.ray, enter, length, weight, p.att, p.res, in_haze, sun_mis
+            )
+
+            # The sky and the sun at the end of an escaping segment, each with MIS against
+            # its own emitter sampling at the surface the segment left.
+            escaped = p.active & ~si.is_valid()
+            ds_hit = mi.DirectionSample3f(scene, si, p.prev_si)
+            in_disk = escaped & (dr.dot(p.ray.d, self.sun_axis) >= self.sun_cos)
+            sun_pdf = dr.select(in_disk, self.sun_pdf, 0.0)
+            seen = self.sun.eval(si, in_disk) * dr.select(
+                p.prev_delta, 1.0, _mis(p.prev_pdf, sun_pdf)
+            )
+            sky_pdf = self.sky.pdf_direction(p.prev_si, ds_hit, escaped & ~p.prev_delta)
+            mis_sky = dr.select(p.prev_delta, 1.0, _mis(p.prev_pdf, sky_pdf))
+            seen += self.sky.eval(si, escaped) * mis_sky
+            sky = dr.select(escaped, p.beta * seen, 0.0)
+            p.clean += sky
+            for k in range(self.n_levels):
+                p.res[k] += p.att[k] * segment[k] * sky
+                p.att[k] = p.att[k] * segment[k]
+            p.active = p.active & si.is_valid() & (p.depth < self.bounces)
+            self.shade(scene, sampler, p, si)
+            p.depth += 1
+
+        def shade(self, scene, sampler, p, si):
+            """Light path ``p``'s surface ``si`` and turn the path along a BSDF sample: one
+            emitter sample from the sun and one from the sky (not one from sunsky's mixture of
+            both), each level attenuated toward the emitter, and the aureole."""
             ctx = mi.BSDFContext()
-
-            for depth in range(self.bounces + 1):
-                si = scene.ray_intersect(ray, active)
-                hit = active & si.is_valid()
-                t_end = dr.select(si.is_valid(), si.t, dr.inf)
-                enter, length = self.slab_length(ray.o, ray.d, t_end)
-                segment = [self.transmittance(k, length) for k in range(self.n_levels)]
-                sun_mis = dr.select(prev_delta, 1.0, _mis(prev_pdf, self.aureole_pdf(ray.d)))
-                weight = None if depth == 0 else beta
-                self.inscatter(
-                    scene,
-                    sampler,
-                    ray,
-                    enter,
-                    length,
-                    weight,
-                    att,
-                    res,
-                    active & (length > 0.0),
-                    sun_mis,
-                )
-
-                # The sky and the sun at the end of an escaping segment, each with MIS against
-                # its own emitter sampling at the surface the segment left.
-                escaped = active & ~si.is_valid()
-                ds_hit = mi.DirectionSample3f(scene, si, prev_si)
-                seen = mi.Color3f(0.0)
-                in_disk = escaped & (dr.dot(ray.d, self.sun_axis) >= self.sun_cos)
-                sun_pdf = dr.select(in_disk, self.sun_pdf, 0.0)
-                mis_sun = dr.select(prev_delta, 1.0, _mis(prev_pdf, sun_pdf))
-                seen += self.sun.eval(si, in_disk) * mis_sun
-                sky_pdf = self.sky.pdf_direction(prev_si, ds_hit, escaped & ~prev_delta)
-                mis_sky = dr.select(prev_delta, 1.0, _mis(prev_pdf, sky_pdf))
-                seen += self.sky.eval(si, escaped) * mis_sky
-                sky = dr.select(escaped, beta * seen, 0.0)
-                clean += sky
+            bsdf = si.bsdf(p.ray)
+            active = p.active
+            smooth = active & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+            for sample_light in (self.sample_sun, self.sky.sample_direction):
+                ds_e, em_w = sample_light(si, sampler.next_2d(smooth), smooth)
+                drawn = smooth & (ds_e.pdf > 0)
+                drawn &= ~scene.ray_test(si.spawn_ray(ds_e.d), drawn)
+                value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(ds_e.d), drawn)
+                mis_e = _mis(ds_e.pdf, bsdf_pdf)
+                direct = dr.select(drawn, p.beta * value * em_w * mis_e, 0.0)
+                # Where nothing was drawn the direction may be NaN (the sky's sampler at
+                # the ends of its erfinv): its transmittance would make 0 · NaN = NaN.
+                _, e_length = self.slab_length(si.p, ds_e.d)
+                e_length = dr.select(drawn, e_length, 0.0)
+                p.clean += direct
                 for k in range(self.n_levels):
-                    res[k] += att[k] * segment[k] * sky
+                    lit = p.att[k] * self.transmittance(k, e_length) * direct
+                    p.res[k] += dr.select(drawn, lit, 0.0)
 
-                if depth == self.bounces:
-                    break
-                active = hit
-                for k in range(self.n_levels):
-                    att[k] = att[k] * segment[k]
+            self.sample_aureole(scene, sampler, si, bsdf, ctx, p.beta, p.att, p.res, smooth)
 
-                # Surface: one emitter sample from the sun and one from the sky (not one from
-                # sunsky's mixture of both), each level attenuated toward the emitter.
-                bsdf = si.bsdf(ray)
-                smooth = active & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-                for sample_light in (self.sample_sun, self.sky.sample_direction):
-                    ds_e, em_w = sample_light(si, sampler.next_2d(smooth), smooth)
-                    drawn = smooth & (ds_e.pdf > 0)
-                    drawn &= ~scene.ray_test(si.spawn_ray(ds_e.d), drawn)
-                    value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(ds_e.d), drawn)
-                    mis_e = _mis(ds_e.pdf, bsdf_pdf)
-                    direct = dr.select(drawn, beta * value * em_w * mis_e, 0.0)
-                    # Where nothing was drawn the direction may be NaN (the sky's sampler at
-                    # the ends of its erfinv): its transmittance would make 0 · NaN = NaN.
-                    _, e_length = self.slab_length(si.p, ds_e.d)
-                    e_length = dr.select(drawn, e_length, 0.0)
-                    clean += direct
-                    for k in range(self.n_levels):
-                        lit = att[k] * self.transmittance(k, e_length) * direct
-                        res[k] += dr.select(drawn, lit, 0.0)
-
-                self.sample_aureole(scene, sampler, si, bsdf, ctx, beta, att, res, smooth)
-
-                # Continue along a BSDF sample.
-                bs, bsdf_weight = bsdf.sample(
-                    ctx, si, sampler.next_1d(active), sampler.next_2d(active), active
-                )
-                beta *= bsdf_weight
-                active &= dr.any(beta != 0.0)
-                prev_si = dr.select(active, si, prev_si)
-                prev_pdf = dr.select(active, bs.pdf, prev_pdf)
-                prev_delta = dr.select(
-                    active, mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta), prev_delta
-                )
-                ray = si.spawn_ray(si.to_world(bs.wo))
-
-            aovs = [c for r in res for c in (r.x, r.y, r.z)]
-            return mi.Spectrum(clean), mi.Bool(True), aovs
+            bs, bsdf_weight = bsdf.sample(
+                ctx, si, sampler.next_1d(active), sampler.next_2d(active), active
+            )
+            p.beta = dr.select(active, p.beta * bsdf_weight, p.beta)
+            active &= dr.any(p.beta != 0.0)
+            p.prev_si = dr.select(active, si, p.prev_si)
+            p.prev_pdf = dr.select(active, bs.pdf, p.prev_pdf)
+            delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+            p.prev_delta = dr.select(active, delta, p.prev_delta)
+            p.ray = dr.select(active, si.spawn_ray(si.to_world(bs.wo)), p.ray)
+            p.active = active
 
         def aov_names(self):
             return [f"{k}.{c}" for k in range(self.n_levels) for c in "RGB"]

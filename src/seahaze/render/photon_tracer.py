@@ -125,13 +125,16 @@ def trace_fluence(
     if lanes == 0 or scale <= 0.0:
         return np.zeros((n_levels, slab.n_z, slab.n_dir, 3))
 
-    # Per lane: level, kind (0 sun to the sea, 1 sun scattering, 2 sky) and source photon.
-    lane = np.arange(per_level)
-    kind_np = np.where(lane < n_sun, 0, np.where(lane < 2 * n_sun, 1, 2))
-    source_np = np.where(kind_np == 2, lane - 2 * n_sun, lane % max(n_sun, 1))
-    level = mi.UInt32(np.repeat(np.arange(n_levels), per_level).astype(np.uint32))
-    kind = mi.UInt32(np.tile(kind_np, n_levels).astype(np.uint32))
-    source = mi.UInt32(np.tile(source_np, n_levels).astype(np.uint32))
+    # Per lane: level, kind (0 sun to the sea, 1 sun scattering, 2 sky) and source photon,
+    # computed in the kernel from the lane index and opaque counts. Arrays made from numpy
+    # would be loaded at their numpy address's alignment, which is part of the kernel's hash:
+    # the same kernel would be compiled again for another scene.
+    index = dr.arange(mi.UInt32, lanes)
+    n_sun_op, per_level_op = dr.opaque(mi.UInt32, n_sun), dr.opaque(mi.UInt32, per_level)
+    level = index // per_level_op
+    lane = index - level * per_level_op
+    kind = dr.select(lane < n_sun_op, 0, dr.select(lane < 2 * n_sun_op, 1, 2))
+    source = dr.select(kind == 2, lane - 2 * n_sun_op, lane % dr.maximum(n_sun_op, 1))
     from_sky = kind == 2
 
     def column(sun_values: np.ndarray, sky_values: np.ndarray, i: int) -> mi.Float:
@@ -149,7 +152,7 @@ def trace_fluence(
     # Stream = photon index, the same at every level: photon i of each level draws the same
     # random numbers (correlated table noise across levels, and a level's table does not
     # depend on which other levels are traced with it).
-    photon = mi.UInt64(np.tile(np.arange(per_level, dtype=np.uint64), n_levels))
+    photon = mi.UInt64(lane)
     rng = mi.PCG32(lanes)  # the constructor would add the lane index: seed explicitly
     rng.seed(dr.opaque(mi.UInt64, seed) + photon, photon)
     tables = _SeaTables(sea)

@@ -1,0 +1,107 @@
+"""The diffuse-field tables as the ``physical`` integrator reads them, one lookup per point.
+
+:mod:`seahaze.render.diffuse_table` traces ``J[z, μ, φ, rgb]`` per level on a coarse grid. The
+integrator looks every level up at every in-scattering point of every segment, so the lookup
+is a large part of a level's cost, and the layout is chosen for it:
+
+* **Height** is upsampled :data:`Z_UPSAMPLE` times by linear interpolation once per scene and
+  then read at the nearest fine bin — within an eighth of a traced bin of linear interpolation,
+  at half the memory reads.
+* **Direction** is bilinear in (``μ``, folded azimuth from the sun); its four texels and
+  weights are computed once per segment and serve every level and height.
+* **Memory order** ``(μ, φ, z, level, rgba)``: every level's value of one texel sits in one run
+  of memory (a segment looks all levels up in the same four directions), and RGB is padded to
+  four floats so that one packet gather reads a texel. Measured on the default scene (320×180,
+  32 spp, 11 levels) the pass took 7.7 s instead of 9.5 s with one scalar gather per channel
+  and the levels far apart; the images are bit-identical.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+Z_UPSAMPLE = 4
+"""Height bins of the integrator's tables per bin of the traced ones."""
+
+
+def upsampled_tables(tables: np.ndarray, n_levels: int) -> np.ndarray:
+    """Tables (n_z, n_mu, n_phi, 3L) as (n_mu, n_phi, n_z × Z_UPSAMPLE, L, 4) float32, linearly
+    interpolated in height at the fine bins' centres (clamped at the ends, like a texture), RGB
+    padded with a zero."""
+    n_z = tables.shape[0]
+    fine = (np.arange(n_z * Z_UPSAMPLE) + 0.5) / Z_UPSAMPLE - 0.5  # in coarse texel units
+    low = np.clip(np.floor(fine), 0, n_z - 1).astype(int)
+    high = np.clip(low + 1, 0, n_z - 1)
+    f = np.clip(fine - low, 0.0, 1.0)[:, None, None, None]
+    up = (1.0 - f) * tables[low] + f * tables[high]
+    per_level = up.reshape(n_z * Z_UPSAMPLE, *tables.shape[1:3], n_levels, 3)
+    packed = np.zeros((*per_level.shape[:-1], 4), np.float32)
+    packed[..., :3] = per_level
+    return np.ascontiguousarray(packed.transpose(1, 2, 0, 3, 4))
+
+
+def _linear_taps(u: Any, n: int) -> list[tuple[Any, Any]]:
+    """The two texels and weights of linear interpolation at coordinate ``u`` in ``[0, 1]`` of
+    an ``n``-texel axis with clamped edges (texel centres at ``(i + 0.5)/n``, as drjit's
+    textures)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    x = u * n - 0.5
+    i0 = dr.floor(x)
+    f = x - i0
+    low = mi.UInt32(dr.clip(i0, 0, n - 1))
+    high = mi.UInt32(dr.clip(i0 + 1.0, 0, n - 1))
+    return [(low, 1.0 - f), (high, f)]
+
+
+def owned_floats(values: np.ndarray) -> Any:
+    """``values`` as an evaluated drjit Float array in drjit's own memory. An array made
+    straight from numpy may keep numpy's buffer, whose alignment depends on where numpy put it;
+    drjit compiles packet gathers only from an aligned source, so the kernel (and its hash)
+    would change from one scene to the next and be compiled again."""
+    import drjit as dr
+    import mitsuba as mi
+
+    array = mi.Float(np.ascontiguousarray(values, np.float32).ravel())
+    array = array + dr.opaque(mi.Float, 0.0)  # computed: a fresh, aligned allocation
+    dr.eval(array)
+    return array
+
+
+class TableTexture:
+    """Every level's table of one pass, uploaded for the integrator's kernel."""
+
+    def __init__(self, tables: np.ndarray, n_levels: int) -> None:
+        """``tables`` (n_z, n_mu, n_phi, 3L): channels ``3k..3k+2`` are level ``k``'s RGB."""
+        fine = upsampled_tables(tables, n_levels)
+        self.n_levels = n_levels
+        self.grid = fine.shape[0:3]  # (n_mu, n_phi, n_z fine)
+        self.values = owned_floats(fine)
+
+    def toward(self, travel: Any, sun_azimuth: Any) -> Any:
+        """A function ``(level, z / top) → RGB``: the diffuse in-scattering toward unit travel
+        direction ``travel`` at a relative height in the slab (see the module docstring)."""
+        import drjit as dr
+        import mitsuba as mi
+
+        n_mu, n_phi, n_z = self.grid
+        phi = dr.atan2(travel.y, travel.x) - sun_azimuth
+        phi = dr.abs(dr.atan2(dr.sin(phi), dr.cos(phi)))
+        corners = [
+            (wm * wp, (im * n_phi + ip) * n_z)
+            for im, wm in _linear_taps((travel.z + 1.0) * 0.5, n_mu)
+            for ip, wp in _linear_taps(phi / dr.pi, n_phi)
+        ]
+
+        def lookup(level: int, height: Any) -> Any:
+            iz = mi.UInt32(dr.clip(dr.floor(height * n_z), 0, n_z - 1))
+            value = mi.Color3f(0.0)
+            for weight, offset in corners:
+                rgba = dr.gather(mi.Vector4f, self.values, (offset + iz) * self.n_levels + level)
+                value += weight * mi.Color3f(rgba.x, rgba.y, rgba.z)
+            return value
+
+        return lookup
