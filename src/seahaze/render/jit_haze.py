@@ -1,13 +1,16 @@
 """drjit versions of the haze formulas of :mod:`seahaze.haze`, for the traced integrator.
 
 The same formulas as the numpy ones, written with drjit operations so that they trace into the
-``physical`` mode's compiled kernel; ``tests/test_jit_haze.py`` holds them to the numpy
-originals. Arguments are drjit arrays (or Python floats where noted).
+``physical`` mode's compiled kernels; ``tests/test_jit_haze.py`` holds them to the numpy
+originals. Arguments are drjit arrays (or Python floats where noted). Also the one rule for
+data those kernels read (:func:`owned_floats`).
 """
 
 from __future__ import annotations
 
 from typing import Any
+
+import numpy as np
 
 from ..haze import FOUR_PI
 
@@ -62,9 +65,24 @@ def rotate_directions(d: tuple[Any, Any, Any], cos_theta: Any, phi: Any) -> tupl
     b = dx * dy * a
     tx, ty, tz = 1.0 + sign * dx * dx * a, sign * b, -sign * dx
     sx, sy, sz = b, sign + dy * dy * a, -dy
-    cp, sp = sin_theta * dr.cos(phi), sin_theta * dr.sin(phi)
+    sin_phi, cos_phi = dr.sincos(phi)
+    cp, sp = sin_theta * cos_phi, sin_theta * sin_phi
     ox = cp * tx + sp * sx + cos_theta * dx
     oy = cp * ty + sp * sy + cos_theta * dy
     oz = cp * tz + sp * sz + cos_theta * dz
     norm = dr.rsqrt(ox * ox + oy * oy + oz * oz)
     return ox * norm, oy * norm, oz * norm
+
+
+def owned_floats(values: np.ndarray) -> Any:
+    """``values`` as an evaluated drjit Float array in drjit's own memory. An array made
+    straight from numpy may keep numpy's buffer, whose alignment depends on where numpy put it;
+    drjit compiles packet gathers only from an aligned source, so the kernel (and its hash)
+    would change from one scene to the next and be compiled again."""
+    import drjit as dr
+    import mitsuba as mi
+
+    array = mi.Float(np.ascontiguousarray(values, np.float32).ravel())
+    array = array + dr.opaque(mi.Float, 0.0)  # computed: a fresh, aligned allocation
+    dr.eval(array)
+    return array

@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from .jit_haze import owned_floats
+
 Z_UPSAMPLE = 4
 """Height bins of the integrator's tables per bin of the traced ones."""
 
@@ -55,20 +57,6 @@ def _linear_taps(u: Any, n: int) -> list[tuple[Any, Any]]:
     low = mi.UInt32(dr.clip(i0, 0, n - 1))
     high = mi.UInt32(dr.clip(i0 + 1.0, 0, n - 1))
     return [(low, 1.0 - f), (high, f)]
-
-
-def owned_floats(values: np.ndarray) -> Any:
-    """``values`` as an evaluated drjit Float array in drjit's own memory. An array made
-    straight from numpy may keep numpy's buffer, whose alignment depends on where numpy put it;
-    drjit compiles packet gathers only from an aligned source, so the kernel (and its hash)
-    would change from one scene to the next and be compiled again."""
-    import drjit as dr
-    import mitsuba as mi
-
-    array = mi.Float(np.ascontiguousarray(values, np.float32).ravel())
-    array = array + dr.opaque(mi.Float, 0.0)  # computed: a fresh, aligned allocation
-    dr.eval(array)
-    return array
 
 
 class TableTexture:
