@@ -174,16 +174,21 @@ def _solve_waves(
     ky = 2.0 * math.pi * np.fft.fftfreq(ny, d=h)
     mu = WRAP_DECAY * u / (2.0 * nx * h)  # amplitude ~ exp(-2·mu·|xi|/U)
     # Samples sit at xi0 + j·h: shift the phase to the grid origin; 1/h² turns the
-    # continuous transform into grid values. Both factors separate in kx and ky.
+    # continuous transform into grid values. Both factors separate in kx and ky, and are
+    # computed in double precision; the 2-D products below in single precision (half the
+    # time), as the transform is: the field's own accuracy is far coarser.
     row = _shape_transform(kx, 0.5 * length_m, 4) * np.exp(1j * kx * origin[0])
     col = _shape_transform(ky, 0.5 * beam_m, 2) * np.exp(1j * ky * origin[1])
-    k = np.hypot(kx[None, :], ky[:, None])
+    w2 = (u * kx + 1j * mu) ** 2
+    k = np.hypot(kx[None, :], ky[:, None]).astype(np.float32)
     # The displacement is spread evenly over the draft, each layer at depth z radiating with
     # exp(-k·z) (Michell 1898): factor (1 - exp(-k·T))/(k·T).
-    kt = k * draft_m
-    depth = np.where(kt > 1e-9, -np.expm1(-kt) / np.maximum(kt, 1e-9), 1.0)
-    w2 = (u * kx + 1j * mu) ** 2
-    spectrum = (-draft_m / (h * h)) * col[:, None] * (row * w2)[None, :] * depth / (g * k - w2)
+    kt = k * np.float32(draft_m)
+    depth = np.where(kt > 1e-9, -np.expm1(-kt) / np.maximum(kt, np.float32(1e-9)), 1.0)
+    resonance = np.float32(g) * k - w2.astype(np.complex64)[None, :]
+    top = ((-draft_m / (h * h)) * row * w2).astype(np.complex64)
+    spectrum = col.astype(np.complex64)[:, None] * top[None, :] * depth.astype(np.float32)
+    spectrum /= resonance
     # Height and both slopes in one single-precision transform of the three spectra: the
     # field's own accuracy (linear theory, grid interpolation) is far coarser than float32.
     stacked = np.empty((3, ny, kx.size), dtype=np.complex64)
