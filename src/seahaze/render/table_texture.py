@@ -36,12 +36,13 @@ def upsampled_tables(tables: np.ndarray, n_levels: int) -> np.ndarray:
     fine = (np.arange(n_z * Z_UPSAMPLE) + 0.5) / Z_UPSAMPLE - 0.5  # in coarse texel units
     low = np.clip(np.floor(fine), 0, n_z - 1).astype(int)
     high = np.clip(low + 1, 0, n_z - 1)
-    f = np.clip(fine - low, 0.0, 1.0)[:, None, None, None]
-    up = (1.0 - f) * tables[low] + f * tables[high]
+    f = np.clip(fine - low, 0.0, 1.0).astype(np.float32)[:, None, None, None]
+    values = np.asarray(tables, np.float32)
+    up = (1.0 - f) * values[low] + f * values[high]
     per_level = up.reshape(n_z * Z_UPSAMPLE, *tables.shape[1:3], n_levels, 3)
-    packed = np.zeros((*per_level.shape[:-1], 4), np.float32)
-    packed[..., :3] = per_level
-    return np.ascontiguousarray(packed.transpose(1, 2, 0, 3, 4))
+    packed = np.zeros((*tables.shape[1:3], n_z * Z_UPSAMPLE, n_levels, 4), np.float32)
+    packed[..., :3] = per_level.transpose(1, 2, 0, 3, 4)
+    return packed
 
 
 def _linear_taps(u: Any, n: int) -> list[tuple[Any, Any]]:
