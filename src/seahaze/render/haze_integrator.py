@@ -35,7 +35,9 @@ same random numbers, and a pair differs by the haze, not by Monte Carlo noise. T
 radiance is the integrator's RGB output; level ``k`` is the AOV channels ``k.R, k.G, k.B``.
 
 Every per-level input (``σ``, the mixture, the tables) and ``albedo``, ``g`` are drjit values,
-not literals: the kernel is compiled once per number of levels and reused for every scene.
+not literals: the kernel is compiled once per number of levels and reused for every scene. The
+camera segment is traced unrolled; every later one in a symbolic loop that a packet of lanes
+leaves once all its paths have ended (:meth:`sample`; docs/physics.md, "The kernel").
 """
 
 from __future__ import annotations
@@ -76,10 +78,9 @@ def _mis(pdf_a: Any, pdf_b: Any) -> Any:
 
 
 def _padded(values: np.ndarray) -> Any:
-    """A drjit Float array of ``values`` plus one trailing zero (never a one-element array)."""
-    import mitsuba as mi
-
-    return mi.Float(np.append(np.asarray(values, np.float32), np.float32(0.0)))
+    """A drjit Float array of ``values`` plus one trailing zero (never a one-element array),
+    in drjit's own memory (:func:`jit_haze.owned_floats`)."""
+    return jit_haze.owned_floats(np.append(np.asarray(values, np.float32), np.float32(0.0)))
 
 
 def _one_minus_exp(tau: Any) -> Any:
