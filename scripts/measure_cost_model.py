@@ -7,6 +7,11 @@ hour or more (docs/limits.md). The model is linear in the work, per scene::
                    + pixels · spp · clean
                    + Σ_levels [ fixed(mode, V) + pixels · spp · per_sample(mode, V) ]
 
+except in ``physical``, whose one pass gives the clean image and every level::
+
+    core-seconds = setup + writes + pixels · spp · (pass + (levels − 1) · level)
+                   + Σ_levels table(V)
+
 and wall time = core-seconds / cores. This script measures every constant on this machine with
 the default scene (vessels included) through the public API (``open_session``,
 ``SceneSession.render_clean``, ``LevelRenderer.render``, ``write_scene``), in CPU time of the
@@ -79,6 +84,43 @@ def measure(mode: str, res: tuple[int, int], spp: int) -> dict[str, float]:
     return out
 
 
+def measure_physical(res: tuple[int, int], spp: int) -> dict[str, float]:
+    """CPU seconds of the physical one pass with one level and with the default scene's
+    graded levels (tables apart: a level adds ~6 % to a pass, lost in the noise of three), and
+    of each diffuse table of :data:`LEVELS` alone."""
+    from seahaze.haze import extinction_rgb
+    from seahaze.render.engine import open_session
+    from seahaze.render.physical import PhysicalRenderer
+    from seahaze.sceneio import load_scene
+    from seahaze.spec import with_overrides
+    from seahaze.visibility import channel_extinction
+
+    spec, _ = load_scene(SCENE)
+    spec = with_overrides(spec, spp=spp, resolution=res)
+    haze = spec.haze
+    renderer = PhysicalRenderer(open_session(spec).loaded, spec)
+    sigmas = [channel_extinction(v) for v in haze.levels]
+    tables, table_cpu = renderer.tables, [0.0]
+
+    def timed_tables(*args):
+        result, seconds = timed(lambda: tables(*args))
+        table_cpu[0] += seconds
+        return result
+
+    renderer.tables = timed_tables
+    out: dict[str, float] = {}
+    for _ in range(2):  # the first run loads the kernels
+        for n in (1, len(sigmas)):
+            table_cpu[0] = 0.0
+            _, total = timed(lambda n=n: renderer.render(sigmas[:n], haze.albedo, haze.g, spp, 1))
+            out[f"pass_{'all' if n > 1 else 1}"] = total - table_cpu[0]
+    out["levels"] = len(sigmas)
+    for v in LEVELS:
+        rgb = extinction_rgb(channel_extinction(v))[None, :]
+        _, out[f"table_{v:g}"] = timed(lambda rgb=rgb: tables(rgb, haze.albedo, haze.g, 7))
+    return out
+
+
 def geometry_seconds() -> dict[str, float]:
     """CPU seconds of the sea and vessel geometry per sea quality."""
     from seahaze.camera import Camera
@@ -110,6 +152,7 @@ def main() -> None:
         mode: {spp: measure(mode, (width, height), spp) for spp in (low, high)}
         for mode in ("physical", "reference", "asm")
     }
+    passes = {spp: measure_physical((width, height), spp) for spp in (low, high)}
     geometry = geometry_seconds()
 
     def slope(mode: str, key: str) -> tuple[float, float]:
@@ -119,7 +162,15 @@ def main() -> None:
 
     clean = [slope(m, "clean")[0] for m in runs]
     c_clean = sorted(clean)[1]  # the median of the three modes' clean passes (the same pass)
-    physical = {v: slope("physical", f"level_{v:g}") for v in LEVELS}
+
+    def pass_slope(key: str) -> float:
+        a, b = passes[low][key], passes[high][key]
+        return max((b - a) / (pixels * (high - low)), 0.0)
+
+    n_all = int(passes[high]["levels"])
+    per_pass, per_all = pass_slope("pass_1"), pass_slope("pass_all")
+    per_level = max((per_all - per_pass) / (n_all - 1), 0.0)
+    tables = {v: passes[high][f"table_{v:g}"] for v in LEVELS}
     reference = {v: slope("reference", f"level_{v:g}") for v in LEVELS}
     asm = {v: runs["asm"][high][f"level_{v:g}"] for v in LEVELS}
     opens = [runs[m][s]["open"] for m in runs for s in (low, high)]
@@ -129,10 +180,10 @@ def main() -> None:
         "SETUP_CORE_S": {q: round(g + aov_and_load, 2) for q, g in geometry.items()},
         "CLEAN_CORE_S": float(f"{c_clean:.3g}"),
         "WRITE_CORE_S": float(f"{write_px:.3g}"),
-        # The physical integrator's work per sample does not depend on V (its table does):
-        # the median of the three slopes is the least noisy estimate.
-        "PHYSICAL_CORE_S": float(f"{sorted(p[0] for p in physical.values())[1]:.3g}"),
-        "PHYSICAL_LEVEL_S": {v: round(physical[v][1], 2) for v in LEVELS},
+        # The physical pass's work per sample does not depend on V (its tables do).
+        "PHYSICAL_PASS_CORE_S": float(f"{per_pass:.3g}"),
+        "PHYSICAL_LEVEL_CORE_S": float(f"{per_level:.3g}"),
+        "PHYSICAL_TABLE_S": {v: round(tables[v], 2) for v in LEVELS},
         "REFERENCE_CORE_S": {v: float(f"{reference[v][0]:.3g}") for v in LEVELS},
         "ASM_LEVEL_S": {v: round(asm[v], 2) for v in LEVELS},
     }
@@ -157,15 +208,16 @@ def main() -> None:
         f"| write | {write_px:.3g} s | per pixel and image (PNG, EXR, labels) |",
     ]
     lines.append(
-        f"| physical | {consts['PHYSICAL_CORE_S']:.3g} s | per pixel-sample (median of "
-        + ", ".join(f"{physical[v][0]:.3g}" for v in LEVELS)
-        + " at "
-        + ", ".join(f"{v:g}" for v in LEVELS)
-        + " m) |"
+        f"| physical pass | {consts['PHYSICAL_PASS_CORE_S']:.3g} s | per pixel-sample: the one "
+        "pass with its clean image and one level |"
+    )
+    lines.append(
+        f"| physical level | {consts['PHYSICAL_LEVEL_CORE_S']:.3g} s | per pixel-sample and "
+        f"further level (a pass of {n_all} levels against one) |"
     )
     for v in LEVELS:
         lines.append(
-            f"| physical, V = {v:g} m | {physical[v][1]:.2f} s | per level (the diffuse table) |"
+            f"| physical table, V = {v:g} m | {tables[v]:.2f} s | per level (its diffuse table) |"
         )
     for v in LEVELS:
         lines.append(f"| reference, V = {v:g} m | {reference[v][0]:.3g} s | per pixel-sample |")

@@ -15,6 +15,9 @@ The estimate is the cost model of ``scripts/measure_cost_model.py``, measured on
                              + Σ_levels [ fixed(mode, V) + pixels · spp · per_sample(mode, V) ]
     wall time = Σ_scenes serial + render / cores    (setup and writes are serial)
 
+except in ``physical``, whose one pass gives the clean image and every level: its render part is
+``pixels · spp · (pass + (levels − 1) · level) + Σ_levels table(V)``.
+
 ``V``-dependent constants are interpolated in log V between 50, 300 and 4000 m (held beyond).
 On a GPU (``cuda_ad_rgb``) the estimate is an upper bound.
 """
@@ -46,13 +49,14 @@ CONFIRM_MEMORY_FRACTION = 0.8
 """A scene estimated to need more than this share of the machine's memory needs ``--yes``."""
 
 # measured by scripts/measure_cost_model.py (docs/benchmarks.md, "Cost model"); CPU seconds
-SETUP_CORE_S = {"low": 3.52, "medium": 3.87, "high": 6.94}
-CLEAN_CORE_S = 6.25e-07
-WRITE_CORE_S = 1.48e-06
-PHYSICAL_CORE_S = 7.89e-07
-PHYSICAL_LEVEL_S = {50.0: 11.85, 300.0: 2.22, 4000.0: 0.78}
-REFERENCE_CORE_S = {50.0: 7.26e-06, 300.0: 1.03e-05, 4000.0: 6.32e-06}
-ASM_LEVEL_S = {50.0: 1.85, 300.0: 1.49, 4000.0: 1.33}
+SETUP_CORE_S = {"low": 2.18, "medium": 2.39, "high": 5.44}
+CLEAN_CORE_S = 9.35e-07
+WRITE_CORE_S = 1.34e-06
+PHYSICAL_PASS_CORE_S = 2.95e-06
+PHYSICAL_LEVEL_CORE_S = 1.7e-07
+PHYSICAL_TABLE_S = {50.0: 1.15, 300.0: 0.43, 4000.0: 0.26}
+REFERENCE_CORE_S = {50.0: 1.73e-05, 300.0: 1.15e-05, 4000.0: 6.83e-06}
+ASM_LEVEL_S = {50.0: 1.52, 300.0: 1.23, 4000.0: 0.9}
 
 VALIDATED_FROM_M = {"physical": 100.0}
 """Thinnest visibility (m) down to which the mode is within 3 % of converged ``reference``
@@ -134,12 +138,16 @@ def scene_core_seconds(spec: SceneSpec) -> tuple[float, float]:
     width, height = spec.camera.resolution
     pixels, spp, levels = width * height, spec.render.spp, spec.haze.levels
     serial = SETUP_CORE_S[spec.sea.quality] + pixels * (len(levels) + 1) * WRITE_CORE_S
-    parallel = pixels * spp * CLEAN_CORE_S
     mode = spec.render.mode
+    if mode == "physical":
+        # One pass gives the clean image and every level; each level adds a little to it
+        # and its diffuse table.
+        further = max(len(levels) - 1, 0) * PHYSICAL_LEVEL_CORE_S
+        parallel = pixels * spp * (PHYSICAL_PASS_CORE_S + further)
+        return serial, parallel + sum(_interpolated(PHYSICAL_TABLE_S, v) for v in levels)
+    parallel = pixels * spp * CLEAN_CORE_S
     for v in levels:
-        if mode == "physical":
-            per, fixed = PHYSICAL_CORE_S, _interpolated(PHYSICAL_LEVEL_S, v)
-        elif mode == "reference":
+        if mode == "reference":
             per, fixed = _interpolated(REFERENCE_CORE_S, v), 0.0
         else:
             airlight = spec.render.airlight_spp / 1024.0
