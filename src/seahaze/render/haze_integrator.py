@@ -363,10 +363,9 @@ def make_integrator(
                 self.bounce(scene, sampler, path, camera=False)
                 return path, sampler
 
-            with dr.scoped_set_flag(dr.JitFlag.OptimizeLoops, False):
-                path, sampler = dr.while_loop(
-                    (path, sampler), lambda path, sampler: path.active, body, label="haze_path"
-                )
+            path, sampler = dr.while_loop(
+                (path, sampler), lambda path, sampler: path.active, body, label="haze_path"
+            )
             aovs = [c for r in path.res for c in (r.x, r.y, r.z)]
             return mi.Spectrum(path.clean), mi.Bool(True), aovs
 
