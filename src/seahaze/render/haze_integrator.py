@@ -77,12 +77,6 @@ def _mis(pdf_a: Any, pdf_b: Any) -> Any:
     return dr.detach(dr.select(pdf_a > 0, a2 / (a2 + pdf_b * pdf_b), 0.0))
 
 
-def _padded(values: np.ndarray) -> Any:
-    """A drjit Float array of ``values`` plus one trailing zero (never a one-element array),
-    in drjit's own memory (:func:`jit_haze.owned_floats`)."""
-    return jit_haze.owned_floats(np.append(np.asarray(values, np.float32), np.float32(0.0)))
-
-
 def _one_minus_exp(tau: Any) -> Any:
     """``1 − e^{−τ}``, accurate for small ``τ`` and 1 for ``τ = ∞``."""
     import drjit as dr
@@ -192,15 +186,15 @@ def make_integrator(
             opaque = lambda x: dr.opaque(mi.Float, float(x))  # noqa: E731
             self.sigma = [mi.Color3f(*(opaque(c) for c in row)) for row in sigma]
             # Every input is an opaque kernel parameter, so another scene or level reuses the
-            # compiled kernel. Arrays get a padding element: drjit treats one-element arrays as
-            # scalars whose load alignment (hence the kernel's hash) varies with the address.
-            self.sigma_g = _padded(sigma[:, 1])
+            # compiled kernel; per-level arrays are padded (jit_haze.padded_floats).
+            self.sigma_g = jit_haze.padded_floats(sigma[:, 1])
             weights = np.asarray(mixture, np.float64) / np.sum(mixture)
             self.mix_weight = [opaque(w) for w in weights]
-            self.mix_start = _padded(np.concatenate([[0.0], np.cumsum(weights)[:-1]]))
-            self.mix_width = _padded(weights)
+            self.mix_start = jit_haze.padded_floats(
+                np.concatenate([[0.0], np.cumsum(weights)[:-1]])
+            )
+            self.mix_width = jit_haze.padded_floats(weights)
             self.mix_bounds = [opaque(b) for b in np.cumsum(weights)[:-1]]
-            dr.make_opaque(self.sigma_g, self.mix_start, self.mix_width)
             self.albedo, self.g = opaque(albedo), opaque(g)
             self.sun_azimuth = opaque(sun_azimuth_rad)
             self.table = TableTexture(tables, self.n_levels)

@@ -86,3 +86,10 @@ def owned_floats(values: np.ndarray) -> Any:
     array = array + dr.opaque(mi.Float, 0.0)  # computed: a fresh, aligned allocation
     dr.eval(array)
     return array
+
+
+def padded_floats(values: np.ndarray) -> Any:
+    """:func:`owned_floats` of ``values`` plus one trailing zero: per-level parameters read by
+    index. drjit treats a one-element array as a scalar, a different kernel from the one for
+    several levels; the padding keeps one kernel for every level count."""
+    return owned_floats(np.append(np.asarray(values, np.float32), np.float32(0.0)))

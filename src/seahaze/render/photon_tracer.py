@@ -152,11 +152,8 @@ def trace_fluence(
 
     d = tuple(column(sun_d, sky_d, i) for i in range(3))
     w = tuple(column(sun_w / scale, sky_w / scale, i) for i in range(3))
-    # An opaque kernel parameter, padded: drjit treats a one-element array as a scalar whose
-    # load alignment (hence the kernel's hash, and a recompilation) varies with its address.
-    sigma_values = mi.Float(np.append(np.asarray(sigmas, np.float32), np.float32(0.0)))
-    dr.make_opaque(sigma_values)
-    sigma = dr.gather(mi.Float, sigma_values, level)
+    # A kernel input, not a literal, and never a one-element array (jit_haze.padded_floats).
+    sigma = dr.gather(mi.Float, jit_haze.padded_floats(sigmas), level)
     # Stream = photon index, the same at every level: photon i of each level draws the same
     # random numbers (correlated table noise across levels, and a level's table does not
     # depend on which other levels are traced with it).
