@@ -44,7 +44,8 @@ def test_lookup_interpolates_a_linear_table_exactly(mitsuba_variant) -> None:
     height = rng.uniform(0.5 / N_Z, 1.0 - 0.5 / N_Z, n)
 
     texture = TableTexture(_linear_tables(), LEVELS)
-    lookup = texture.toward(travel, dr.opaque(mi.Float, sun_azimuth))
+    cos_sun, sin_sun = (dr.opaque(mi.Float, f(sun_azimuth)) for f in (np.cos, np.sin))
+    lookup = texture.toward(travel, cos_sun, sin_sun)
     field = SLOPE_MU * mu + SLOPE_PHI * phi + SLOPE_Z * height
     z_step = SLOPE_Z * 0.5 / (N_Z * Z_UPSAMPLE)
     for level in range(LEVELS):
@@ -63,7 +64,8 @@ def test_lookup_clamps_at_the_table_edges(mitsuba_variant) -> None:
     tables = _linear_tables()
     texture = TableTexture(tables, LEVELS)
     up = mi.Vector3f(float(np.cos(0.3)) * 1e-4, float(np.sin(0.3)) * 1e-4, 1.0)  # at the sun's
-    value = texture.toward(up, dr.opaque(mi.Float, 0.3))(1, mi.Float(1.0))
+    sun = (dr.opaque(mi.Float, float(f(0.3))) for f in (np.cos, np.sin))
+    value = texture.toward(up, *sun)(1, mi.Float(1.0))
     np.testing.assert_allclose(np.array(value).ravel(), tables[-1, -1, 0, 3:6], rtol=1e-5)
 
 

@@ -196,7 +196,9 @@ def make_integrator(
             self.mix_width = jit_haze.padded_floats(weights)
             self.mix_bounds = [opaque(b) for b in np.cumsum(weights)[:-1]]
             self.albedo, self.g = opaque(albedo), opaque(g)
-            self.sun_azimuth = opaque(sun_azimuth_rad)
+            self.sun_cos_az, self.sun_sin_az = (
+                opaque(f(sun_azimuth_rad)) for f in (np.cos, np.sin)
+            )
             self.table = TableTexture(tables, self.n_levels)
 
         def sun_cone_direction(self, u: Any) -> Any:
@@ -301,7 +303,7 @@ def make_integrator(
             sun_d, lit, sun = self.sun_source(sampler, active, ray.d)
             mu_sun = sun_d.z
             z_entry = ray.o.z + enter * ray.d.z
-            tables = self.table.toward(-ray.d, self.sun_azimuth)
+            tables = self.table.toward(-ray.d, self.sun_cos_az, self.sun_sin_az)
             # Stratified, and the same for every level (common random numbers).
             n_points = self.camera_points if weight is None else 1
             us = [(i + sampler.next_1d(active)) / n_points for i in range(n_points)]

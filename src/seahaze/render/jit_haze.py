@@ -74,6 +74,18 @@ def rotate_directions(d: tuple[Any, Any, Any], cos_theta: Any, phi: Any) -> tupl
     return ox * norm, oy * norm, oz * norm
 
 
+def folded_azimuth(x: Any, y: Any, cos_sun: Any, sin_sun: Any) -> Any:
+    """Azimuth (rad, in ``[0, π]``) of horizontal direction ``(x, y)`` from the sun's azimuth
+    (given by its cosine and sine), folded: the sky is symmetric about the sun's vertical
+    plane. The direction turned into the sun's frame, one ``atan2``; as the azimuth bins of
+    :func:`seahaze.render.diffuse_table.direction_bins`."""
+    import drjit as dr
+
+    along = x * cos_sun + y * sin_sun
+    across = dr.abs(y * cos_sun - x * sin_sun)
+    return dr.atan2(across, along)
+
+
 def owned_floats(values: np.ndarray) -> Any:
     """``values`` as an evaluated drjit Float array in drjit's own memory. An array made
     straight from numpy may keep numpy's buffer, whose alignment depends on where numpy put it;

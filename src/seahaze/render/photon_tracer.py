@@ -309,10 +309,7 @@ def _tally(tally, base, z0, z1, d, w, active, params: _Params) -> None:
     slab = params.slab
     dx, dy, dz = d
     mu_bin = mi.UInt32(dr.clip(mi.Int32((dz + 1.0) * 0.5 * slab.n_mu), 0, slab.n_mu - 1))
-    # Azimuth from the sun folded into [0, π]: the direction turned into the sun's frame.
-    along = dx * params.cos_sun + dy * params.sin_sun
-    across = dr.abs(dy * params.cos_sun - dx * params.sin_sun)
-    phi = dr.atan2(across, along)
+    phi = jit_haze.folded_azimuth(dx, dy, params.cos_sun, params.sin_sun)
     phi_bin = mi.UInt32(dr.clip(mi.Int32(phi / dr.pi * slab.n_phi), 0, slab.n_phi - 1))
     dir_bin = mu_bin * slab.n_phi + phi_bin
     inv_mu = 1.0 / dr.maximum(dr.abs(dz), MU_FLOOR)

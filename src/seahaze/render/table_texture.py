@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from .jit_haze import owned_floats
+from . import jit_haze
 
 Z_UPSAMPLE = 4
 """Height bins of the integrator's tables per bin of the traced ones."""
@@ -68,17 +68,17 @@ class TableTexture:
         fine = upsampled_tables(tables, n_levels)
         self.n_levels = n_levels
         self.grid = fine.shape[0:3]  # (n_mu, n_phi, n_z fine)
-        self.values = owned_floats(fine)
+        self.values = jit_haze.owned_floats(fine)
 
-    def toward(self, travel: Any, sun_azimuth: Any) -> Any:
+    def toward(self, travel: Any, cos_sun: Any, sin_sun: Any) -> Any:
         """A function ``(level, z / top) → RGB``: the diffuse in-scattering toward unit travel
-        direction ``travel`` at a relative height in the slab (see the module docstring)."""
+        direction ``travel`` at a relative height in the slab (see the module docstring);
+        ``cos_sun``, ``sin_sun``: of the sun's azimuth."""
         import drjit as dr
         import mitsuba as mi
 
         n_mu, n_phi, n_z = self.grid
-        phi = dr.atan2(travel.y, travel.x) - sun_azimuth
-        phi = dr.abs(dr.atan2(dr.sin(phi), dr.cos(phi)))
+        phi = jit_haze.folded_azimuth(travel.x, travel.y, cos_sun, sin_sun)
         corners = [
             (wm * wp, (im * n_phi + ip) * n_z)
             for im, wm in _linear_taps((travel.z + 1.0) * 0.5, n_mu)
