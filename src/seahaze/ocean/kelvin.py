@@ -187,7 +187,7 @@ def _solve_waves(
     depth = np.where(kt > 1e-9, -np.expm1(-kt) / np.maximum(kt, np.float32(1e-9)), 1.0)
     resonance = np.float32(g) * k - w2.astype(np.complex64)[None, :]
     top = ((-draft_m / (h * h)) * row * w2).astype(np.complex64)
-    spectrum = col.astype(np.complex64)[:, None] * top[None, :] * depth.astype(np.float32)
+    spectrum = col.astype(np.complex64)[:, None] * top[None, :] * depth
     spectrum /= resonance
     # Height and both slopes in one single-precision transform of the three spectra: the
     # field's own accuracy (linear theory, grid interpolation) is far coarser than float32.
