@@ -58,7 +58,9 @@ def timed(fn):
 
 
 def measure(mode: str, res: tuple[int, int], spp: int) -> dict[str, float]:
-    """CPU seconds of every pass of the default scene in ``mode`` at ``res`` and ``spp``."""
+    """CPU seconds of every pass of the default scene in ``mode`` at ``res`` and ``spp``
+    (``physical``: only the clean pass and the writes; its one pass is
+    :func:`measure_physical`'s)."""
     from seahaze.dataset import Layout
     from seahaze.dataset.writer import write_scene
     from seahaze.render.engine import open_session, render_scene
@@ -74,7 +76,7 @@ def measure(mode: str, res: tuple[int, int], spp: int) -> dict[str, float]:
         session, out["open"] = timed(lambda: open_session(spec))
         clean, out["clean"] = timed(session.render_clean)
         renderer = session.level_renderer(clean)
-        for i, v in enumerate(LEVELS):
+        for i, v in enumerate(() if mode == "physical" else LEVELS):
             sigma = channel_extinction(v)
             _, out[f"level_{v:g}"] = timed(lambda r=renderer, s=sigma, i=i: r.render(s, i))
     small = with_overrides(spec, spp=1, levels=[300.0])
