@@ -8,6 +8,7 @@ bytes. EXR files hold linear radiance (or distance) unscaled, float32, ZIP-compr
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 from collections.abc import Iterator
@@ -45,6 +46,7 @@ def write_exr(path: str | Path, channels: dict[str, np.ndarray]) -> None:
     """Write float32 channels (each (H, W)) to an OpenEXR file atomically, ZIP-compressed."""
     import OpenEXR
 
+    _use_exr_threads(OpenEXR)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     data = {
         name: np.ascontiguousarray(values, dtype=np.float32) for name, values in channels.items()
@@ -56,6 +58,15 @@ def write_exr(path: str | Path, channels: dict[str, np.ndarray]) -> None:
             # OpenEXR reports a failed write (full disk, quota, I/O error) as RuntimeError;
             # as an OSError the batch stops on it like on any other write error.
             raise _exr_write_error(Path(path), err) from err
+
+
+@functools.cache
+def _use_exr_threads(openexr: Any) -> None:
+    """Let OpenEXR compress a file's blocks on every CPU of the process (its default is none:
+    ZIP took 0.23 s for a 1280×720 RGB file on one thread, 0.12 s on two). The bytes do not
+    change: each block is compressed alone."""
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    openexr.set_global_thread_count(max(1, cpus or 1))
 
 
 def _exr_write_error(path: Path, err: RuntimeError) -> OSError:

@@ -7,6 +7,9 @@ gets the same label file: the boxes do not depend on the haze.
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor, wait
+
 import numpy as np
 
 from .. import fileio, imaging
@@ -16,19 +19,34 @@ from .layout import Layout
 
 
 def write_scene(layout: Layout, scene: SceneRender) -> None:
-    """Write every file of ``scene`` (see :meth:`Layout.scene_files`), each atomically."""
+    """Write every file of ``scene`` (see :meth:`Layout.scene_files`), each atomically.
+
+    The images are encoded and written by a few threads (PNG and EXR compression release the
+    GIL): at 1280×720 the 12 images' files took 9 s on one thread, a tenth of the render. The
+    bytes do not depend on the order; the first failure is raised once all writes ended.
+    """
     name = scene.name
-    _write_image(layout, CLEAN_LEVEL, scene, scene.clean_image, scene.clean)
-    fileio.write_text(layout.label(CLEAN_LEVEL, name), scene.label_text)
+    images = [(CLEAN_LEVEL, scene.clean_image, scene.clean)]
+    images += [(level.name, level.image, level.radiance) for level in scene.levels]
+    with ThreadPoolExecutor(max_workers=_writer_threads()) as pool:
+        writes = [pool.submit(_write_image, layout, *image, scene) for image in images]
+        wait(writes)
+    for write in writes:
+        write.result()
+    for level, _, _ in images:
+        fileio.write_text(layout.label(level, name), scene.label_text)
     fileio.write_exr(layout.depth(name), {"Z": scene.geometry.distance_m})
-    for level in scene.levels:
-        _write_image(layout, level.name, scene, level.image, level.radiance)
-        fileio.write_text(layout.label(level.name, name), scene.label_text)
     fileio.write_json(layout.meta(name), scene.meta)
 
 
+def _writer_threads() -> int:
+    """Threads for the image writes: the CPUs this process may use, at most four."""
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return max(1, min(4, cpus or 1))
+
+
 def _write_image(
-    layout: Layout, level: str, scene: SceneRender, shown: np.ndarray, radiance: np.ndarray
+    layout: Layout, level: str, shown: np.ndarray, radiance: np.ndarray, scene: SceneRender
 ) -> None:
     """The PNG of ``shown`` (denoised when denoising is on) and the EXR of the rendered,
     undenoised ``radiance``."""
