@@ -14,7 +14,7 @@ from seahaze.camera import Camera
 from seahaze.labels import boxes_from_instances
 from seahaze.metric.evaluate import evaluate_level
 from seahaze.metric.reader import load_dataset
-from seahaze.render import passes
+from seahaze.render import jit_haze, passes
 from seahaze.render.scene import build_scene
 from seahaze.vessels import CLASS_NAMES, VESSEL_CLASSES
 from seahaze.world import MeshData, build_geometry
@@ -73,6 +73,34 @@ def test_occluded_vessel_gets_the_box_of_its_visible_part():
     assert 0.2 < far.visible_fraction < 0.8 and near.visible_fraction == 1.0
     # Its unoccluded footprint: pixel-centre rays that meet the box, by an independent slab test.
     assert abs(int(geo.footprint_px[1]) - _rays_hitting_box(camera, far_c, far_s)) <= 1
+
+
+def test_a_vessel_met_by_one_pixel_ray_has_its_distance_and_a_one_pixel_footprint(monkeypatch):
+    # Only one ray walks on past the first surface (through the small box's front and back
+    # faces, to the sea): the geometry pass traces that one ray alone, twice, each time as a
+    # repeated pair (jit_haze.owned_indices).
+    spec = small_spec(camera={"resolution": [160, 90], "pitch_deg": -1.0})
+    camera = Camera.from_spec(spec.camera)
+    row, col = 45, 101  # 1° below the horizon: the sea lies ~690 m out, behind the box
+    direction = camera.pixel_center_directions()[row, col]
+    center = camera.origin + 500.0 * direction
+    size = (0.4, 0.4, 0.4)
+    loaded, _ = load_flat_scene(spec, vessels=[box_vessel(0, tuple(center), size)], haze_box=False)
+    walking: list[int] = []
+    owned_indices = jit_haze.owned_indices
+    monkeypatch.setattr(
+        jit_haze, "owned_indices", lambda v: walking.append(len(v)) or owned_indices(v)
+    )
+    geo = passes.render_geometry(loaded)
+    assert walking == [1, 1]
+    assert int(geo.footprint_px[0]) == _rays_hitting_box(camera, center, size) == 1
+    assert list(zip(*np.nonzero(geo.instance == 0), strict=True)) == [(row, col)]
+    # The front face of the box, by the slab test along the pixel's ray.
+    with np.errstate(divide="ignore"):
+        t0 = (center - np.asarray(size) / 2 - camera.origin) / direction
+        t1 = (center + np.asarray(size) / 2 - camera.origin) / direction
+    front = np.max(np.minimum(t0, t1))
+    assert geo.distance_m[row, col] == pytest.approx(front, rel=1e-5)
 
 
 def test_mostly_hidden_vessel_is_dropped_below_the_visible_fraction():

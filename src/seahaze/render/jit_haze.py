@@ -100,6 +100,21 @@ def owned_floats(values: np.ndarray) -> Any:
     return array
 
 
+def owned_indices(values: np.ndarray) -> Any:
+    """``values`` as an evaluated drjit UInt32 array in drjit's own memory, at least two long
+    (a one-element array would be a scalar, another kernel): :func:`owned_floats` for the
+    indices of a gather; a one-element ``values`` is repeated."""
+    import drjit as dr
+    import mitsuba as mi
+
+    values = np.ascontiguousarray(values, np.uint32).ravel()
+    if len(values) == 1:
+        values = np.repeat(values, 2)
+    array = mi.UInt32(values) + dr.opaque(mi.UInt32, 0)
+    dr.eval(array)
+    return array
+
+
 def padded_floats(values: np.ndarray) -> Any:
     """:func:`owned_floats` of ``values`` plus one trailing zero: per-level parameters read by
     index. drjit treats a one-element array as a scalar, a different kernel from the one for

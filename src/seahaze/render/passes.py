@@ -61,6 +61,8 @@ def render_geometry(loaded: LoadedScene) -> GeometryPass:
     import drjit as dr
     import mitsuba as mi
 
+    from .jit_haze import owned_floats, owned_indices
+
     cam = loaded.camera
     sensor = loaded.scene.sensors()[0]
     width, height = cam.width, cam.height
@@ -77,42 +79,49 @@ def render_geometry(loaded: LoadedScene) -> GeometryPass:
     values = np.array([loaded.shape_ids[k] for k in keys], dtype=np.int32)
     n_vessels = loaded.n_vessels
     n = width * height
-    pixel = np.arange(n)
     hit_point = np.full((n, 3), np.nan)
     first = np.full(n, -1, dtype=np.int32)
     pending = np.ones(n, dtype=bool)  # first surface not found yet
-    tracing = np.ones(n, dtype=bool)  # still walking through the box and vessels
+    travelled = np.zeros(n, dtype=np.float32)  # along the camera ray to the current origin
     footprint: list[np.ndarray] = []
+    # The pixels still walking through the box and vessels: all at first, then only those
+    # (a few percent), each crossing tracing just them instead of every pixel again.
+    walking = np.arange(n)
     current = mi.Ray3f(ray)
-    travelled = dr.zeros(mi.Float, n)  # distance along the camera ray to the current origin
     for _ in range(GEOMETRY_MAX_CROSSINGS):
         si = loaded.scene.ray_intersect(current)
         # Evaluate every field in one kernel: read lazily, each field (and the next spawned
         # ray) would re-trace the whole chain of crossings, quadratic in their number.
         dr.eval(si)
-        valid = np.array(si.is_valid())
-        sid = np.array(dr.reinterpret_array(mi.UInt32, si.shape)).astype(np.int64)
+        m = len(walking)  # the rays traced: these, and a repeated one where m is 1
+        valid = np.array(si.is_valid())[:m]
+        sid = np.array(dr.reinterpret_array(mi.UInt32, si.shape))[:m].astype(np.int64)
         owner = np.where(valid, values[np.clip(np.searchsorted(keys, sid), 0, len(keys) - 1)], -3)
-        owner = _vessel_owners(loaded, owner, sid, np.array(si.prim_index))
-        p = np.stack([np.array(si.p.x), np.array(si.p.y), np.array(si.p.z)], axis=-1)
-        found = pending & valid & (owner != -2)
-        hit_point[found] = p[found]
-        first[found] = owner[found]
-        pending &= valid & (owner == -2)
-        behind = tracing & (owner >= 0)
-        footprint.append(pixel[behind] * max(n_vessels, 1) + owner[behind])
+        owner = _vessel_owners(loaded, owner, sid, np.array(si.prim_index)[:m])
+        p = np.stack([np.array(si.p.x), np.array(si.p.y), np.array(si.p.z)], axis=-1)[:m]
+        found = pending[walking] & valid & (owner != -2)
+        hit_point[walking[found]] = p[found]
+        first[walking[found]] = owner[found]
+        pending[walking] &= valid & (owner == -2)
+        behind = owner >= 0
+        footprint.append(walking[behind] * max(n_vessels, 1) + owner[behind])
         # Keep walking through the haze box and vessels; stop at the sea or the sky.
-        tracing &= valid & ((owner == -2) | (owner >= 0))
-        if not tracing.any():
+        going_on = valid & ((owner == -2) | behind)
+        if not going_on.any():
             break
         # Continue on the same line just past this hit. si.spawn_ray would push the origin off
         # the line along the surface normal by ~1e-4 |p| (0.2 m on the top of a 2 km haze box
         # seen from above it), moving the sea hit by metres at grazing angles. The step along
         # the ray keeps the new origin past the surface despite float32 rounding of |p|.
-        step = si.t * (1.0 + 1e-5) + 1e-3
-        travelled = dr.select(si.is_valid(), travelled + step, travelled)
-        current = mi.Ray3f(ray.o + ray.d * travelled, ray.d)
-        dr.eval(travelled, current)
+        step = np.array(si.t * (1.0 + 1e-5) + 1e-3)[:m]
+        travelled[walking] += step
+        walking = walking[going_on]
+        # The walking rays gathered from the camera's by index, every array in drjit's own
+        # memory: one compiled kernel for any number of them (jit_haze.owned_floats).
+        index = owned_indices(walking)
+        d = dr.gather(mi.Vector3f, ray.d, index)
+        far = owned_floats(np.resize(travelled[walking], dr.width(index)))
+        current = mi.Ray3f(dr.gather(mi.Point3f, ray.o, index) + d * far, d)
     distance = np.linalg.norm(hit_point - origin, axis=-1)
     distance = np.where(np.isfinite(distance), distance, np.inf).astype(np.float32)
     pairs = np.unique(np.concatenate(footprint)) if footprint else np.zeros(0, np.int64)
