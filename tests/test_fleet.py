@@ -113,3 +113,46 @@ def test_scenes_with_different_vessels_run_one_compiled_kernel() -> None:
     finally:
         dr.set_flag(dr.JitFlag.KernelHistory, False)
     assert hashes[0] == hashes[1]
+
+
+def test_a_scene_with_another_sun_sea_and_fleet_compiles_no_kernel_of_its_own() -> None:
+    """Every kernel of 100 operations or more that a second scene launches — its own sun,
+    wind, sea roughness and vessels — is one the first scene launched (drjit's kernel hash):
+    no scene value, numpy buffer address or count of rays through vessels is part of a
+    kernel, so a batch compiles its kernels once, not a few per scene."""
+    dr = pytest.importorskip("drjit")
+    from seahaze.render.engine import render_scene
+
+    other = (
+        SCENE.replace("name: fleet", "name: other")
+        .replace("sea: {quality: low}", "sea: {quality: low, wind_speed: 11, seed: 9}")
+        .replace("haze:", "sun: {elevation_deg: 51, azimuth_deg: 250}\nhaze:")
+        .replace("class: tug, distance_m: 300", "class: fishing_boat, distance_m: 260")
+    )
+    launched: list[set[str]] = []
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        for text, name in ((SCENE, "fleet"), (other, "other")):
+            dr.kernel_history()  # clear
+            render_scene(parse_scene_text(text, f"{name}.yaml"), name)
+            history = dr.kernel_history()
+            launched.append({h["hash"] for h in history if h.get("operation_count", 0) >= 100})
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    assert len(launched[1]) >= 5  # the geometry pass, sun, sea, photons and the render
+    assert launched[1] <= launched[0]
+
+
+def test_vessel_bsdfs_are_loaded_once_and_only_the_last_set_is_kept() -> None:
+    pytest.importorskip("mitsuba")
+    from seahaze.render import fleet
+
+    first = fleet.loaded_vessel_bsdfs(ROUGHNESS_CLASSES)
+    again = fleet.loaded_vessel_bsdfs(ROUGHNESS_CLASSES)
+    assert all(a is b for a, b in zip(first, again, strict=True))
+    black = fleet.loaded_vessel_bsdfs(ROUGHNESS_CLASSES, black=True)
+    assert not any(a is b for a, b in zip(first, black, strict=True))
+    # The painted set was dropped: drjit would trace every live BSDF into the black scene's
+    # kernel otherwise.
+    assert len(fleet._LOADED) == len(ROUGHNESS_CLASSES)
+    assert {key[2] for key in fleet._LOADED} == {True}

@@ -125,6 +125,30 @@ def vessel_bsdf(roughness: float, black: bool = False) -> dict:
     }
 
 
+_LOADED: dict[tuple[str, float, bool], Any] = {}
+"""The vessel BSDFs of the last scene, by (variant, roughness, black): kept for the next."""
+
+
+def loaded_vessel_bsdfs(roughnesses: Sequence[float], black: bool = False) -> list[Any]:
+    """The loaded Mitsuba BSDFs of :func:`vessel_bsdf` for ``roughnesses``, the same objects
+    as the previous scene's where it had them.
+
+    Loading a roughplastic tabulates its coat's transmittance (a kernel launch): 17 ms each,
+    0.19 s of a CI-size scene's 3–4 s for the eleven classes, the same every scene. Only the
+    last scene's BSDFs are kept: drjit traces a virtual call over every live BSDF, so a BSDF
+    kept from an earlier, different set would join this scene's kernel (module docstring).
+    """
+    import mitsuba as mi
+
+    keys = [(mi.variant(), float(r), bool(black)) for r in roughnesses]
+    for stale in set(_LOADED) - set(keys):
+        del _LOADED[stale]
+    for key in keys:
+        if key not in _LOADED:
+            _LOADED[key] = mi.load_dict(vessel_bsdf(key[1], key[2]))
+    return [_LOADED[key] for key in keys]
+
+
 _REGISTERED: set[str] = set()
 
 

@@ -21,6 +21,7 @@ from ..ocean.whitecaps import FOAM_REFLECTANCE
 from ..spec import SceneSpec
 from .diffuse_table import DEFAULT_GRID, TableGrid, build_tables
 from .haze_integrator import DEFAULT_BOUNCES, make_integrator
+from .jit_haze import owned_floats
 from .passes import render_radiance
 from .photon_tracer import SeaReflectance
 from .scene import LoadedScene, stratified_spp, sunsky_dict
@@ -54,6 +55,7 @@ def emitter_photons(
     it.p = mi.Point3f(0.0, 0.0, top_m + 1.0)
     it.t = 0.0
     ds, weight = emitter.sample_direction(it, sampler.next_2d())
+    dr.eval(ds.d, weight)  # one kernel: read one by one, each component would be another
     d = np.stack([np.array(ds.d.x), np.array(ds.d.y), np.array(ds.d.z)], axis=1).astype(np.float64)
     w = np.stack([np.array(weight[i]) for i in range(3)], axis=1).astype(np.float64)
     cos_up = np.maximum(d[:, 2], 0.0)
@@ -94,11 +96,18 @@ def sample_sea_reflectance(
     si.n = mi.Normal3f(0.0, 0.0, 1.0)
     si.sh_frame = mi.Frame3f(mi.Vector3f(1, 0, 0), mi.Vector3f(0, 1, 0), mi.Vector3f(0, 0, 1))
     si.t = 0.0
-    si.wi = mi.Vector3f(-sin_in, 0.0, cos_in)
+    # Every input in drjit's own memory: made from numpy, the kernel's loads (and hash) would
+    # follow numpy's buffer alignment, and the kernel be compiled again in other processes.
+    si.wi = mi.Vector3f(owned_floats(-sin_in), 0.0, owned_floats(cos_in))
     rng = np.random.default_rng(seed)
     u = rng.random((n, 3))
     ctx = mi.BSDFContext(mi.TransportMode.Importance)
-    bs, weight = bsdf.sample(ctx, si, mi.Float(u[:, 0]), mi.Point2f(u[:, 1], u[:, 2]))
+    sample1, sample2 = (
+        owned_floats(u[:, 0]),
+        mi.Point2f(owned_floats(u[:, 1]), owned_floats(u[:, 2])),
+    )
+    bs, weight = bsdf.sample(ctx, si, sample1, sample2)
+    dr.eval(bs.wo, weight)  # one kernel: read one by one, each component would be another
     wo = np.stack([np.array(bs.wo.x), np.array(bs.wo.y), np.array(bs.wo.z)], axis=1)
     w = np.stack([np.array(weight[i]) for i in range(3)], axis=1).astype(np.float64)
     w[~np.isfinite(w) | (wo[:, 2] <= 0.0)[:, None].repeat(3, axis=1)] = 0.0

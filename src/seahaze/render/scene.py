@@ -42,7 +42,7 @@ from ..world import (
     SceneGeometry,
     sun_direction,
 )
-from .fleet import PAINT_ATTRIBUTE, fleet_meshes, vessel_bsdf
+from .fleet import PAINT_ATTRIBUTE, fleet_meshes, loaded_vessel_bsdfs
 
 VESSEL_SHAPE = -4
 """:attr:`LoadedScene.shape_ids` value of the vessel meshes (the face tells which vessel)."""
@@ -113,14 +113,14 @@ def _mesh(
     name: str,
     vertices: np.ndarray,
     faces: np.ndarray,
-    bsdf: dict,
+    bsdf: Any,
     attributes: dict[str, np.ndarray],
 ) -> Any:
-    """A Mitsuba mesh built straight from numpy arrays (no files); ``attributes`` maps a
-    ``vertex_*`` name to (N,) or (N, C) float32 values."""
+    """A Mitsuba mesh built straight from numpy arrays (no files) with the loaded BSDF
+    ``bsdf``; ``attributes`` maps a ``vertex_*`` name to (N,) or (N, C) float32 values."""
     mi = _mi()
     props = mi.Properties()
-    props["bsdf"] = mi.load_dict(bsdf)
+    props["bsdf"] = bsdf
     m = mi.Mesh(name, vertex_count=len(vertices), face_count=len(faces), props=props)
     for key, values in attributes.items():
         values = np.ascontiguousarray(values, dtype=np.float32)
@@ -134,7 +134,7 @@ def _mesh(
 
 def _sea_mesh(sea: MeshData, bsdf: dict) -> Any:
     attributes = {f"vertex_{name}": values for name, values in sea.attributes.items()}
-    return _mesh(sea.name, sea.vertices, sea.faces, bsdf, attributes)
+    return _mesh(sea.name, sea.vertices, sea.faces, _mi().load_dict(bsdf), attributes)
 
 
 def _sea_bsdf(spec: SceneSpec, roughness: float) -> dict:
@@ -339,12 +339,15 @@ def build_scene(
     }
     if not haze_box:
         del scene[HAZE_BOX_ID], scene[HAZE_ID]
-    surfaces = {"sea": _sea_mesh(geometry.sea, sea_surface_bsdf(spec, geometry))}
     # The vessels as the same fixed set of meshes in every scene (render/fleet.py): one
-    # compiled kernel serves every scene of a batch.
+    # compiled kernel serves every scene of a batch. Their BSDFs, kept from scene to scene,
+    # are loaded before the sea's, so that they hold the lowest registry ids in every process
+    # and the ids of every scene's BSDFs (which its kernel is traced over) are those of a
+    # fresh process rendering that scene alone.
     fleet = fleet_meshes(geometry.vessels, (camera.x_m, camera.y_m))
-    for part in fleet:
-        bsdf = vessel_bsdf(part.roughness, black_vessels)
+    bsdfs = loaded_vessel_bsdfs([part.roughness for part in fleet], black_vessels)
+    surfaces = {"sea": _sea_mesh(geometry.sea, sea_surface_bsdf(spec, geometry))}
+    for part, bsdf in zip(fleet, bsdfs, strict=True):
         paint = {PAINT_ATTRIBUTE: part.paint}
         surfaces[part.name] = _mesh(part.name, part.vertices, part.faces, bsdf, paint)
     scene.update(surfaces)

@@ -55,12 +55,19 @@ def disk_irradiance(sun: Any, n: int = IRRADIANCE_GRID) -> np.ndarray:
     import drjit as dr
     import mitsuba as mi
 
+    from .jit_haze import owned_floats
+
     cos_max = sun_cone_cos()
     centres = (np.arange(n, dtype=np.float64) + 0.5) / n
     u, v = np.meshgrid(centres, centres, indexing="ij")
-    local = mi.warp.square_to_uniform_cone(mi.Point2f(u.ravel(), v.ravel()), cos_max)
+    # The grid in drjit's own memory and the sun's direction opaque: one compiled kernel for
+    # every sun (a literal direction, or numpy's buffer alignment, made one per scene).
+    grid = mi.Point2f(owned_floats(u), owned_floats(v))
+    local = mi.warp.square_to_uniform_cone(grid, cos_max)
     ds = dr.zeros(mi.DirectionSample3f, n * n)
-    ds.d = mi.Frame3f(mi.Vector3f(*(float(c) for c in sun_axis(sun)))).to_world(local)
+    axis = mi.Vector3f(*(dr.opaque(mi.Float, float(c)) for c in sun_axis(sun)))
+    ds.d = mi.Frame3f(axis).to_world(local)
     radiance = sun.eval_direction(dr.zeros(mi.Interaction3f, n * n), ds)
+    dr.eval(radiance)  # one kernel for the three channels
     mean = np.array([np.mean(np.asarray(radiance[c], np.float64)) for c in range(3)])
     return mean * 2.0 * np.pi * (1.0 - cos_max)
