@@ -297,6 +297,7 @@ class FFTOcean:
         self.requested_choppiness = float(choppiness)
         self._grids = [c.fields(self.time_s) for c in self.cascades]
         self._pyramids: list[list[np.ndarray]] | None = None
+        self._power: tuple[float, list[tuple[np.ndarray, np.ndarray]]] | None = None
         self._choppiness_limit: float | None = None
         self.choppiness = self.requested_choppiness
         if self.requested_choppiness > 0.0:
@@ -375,12 +376,19 @@ class FFTOcean:
         """
         variance = 0.0
         mss = 0.0
-        for cascade in self.cascades:
-            power = np.abs(cascade.height_spectrum(self.time_s)) ** 2
+        for cascade, (power, k_squared) in zip(self.cascades, self._mode_power(), strict=True):
             weight = _pyramid_mode_weight(cascade, spacing_m)
             variance += float(np.sum(weight**2 * power))
-            mss += float(np.sum(weight**2 * cascade.k**2 * power))
+            mss += float(np.sum(weight**2 * k_squared * power))
         return variance, mss
+
+    def _mode_power(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per cascade, ``|h̃(k, t)|²`` at this surface's time and ``k²``: computed once, as a
+        sea mesh's roughness asks :meth:`resolved_moments` for dozens of spacings."""
+        if self._power is None or self._power[0] != self.time_s:
+            spectra = [(np.abs(c.height_spectrum(self.time_s)) ** 2, c.k**2) for c in self.cascades]
+            self._power = (self.time_s, spectra)
+        return self._power[1]
 
     def mean_square_slope_filtered(self, spacing_m: float) -> float:
         """Mean square slope (dimensionless) of :meth:`displacement_filtered` at vertex spacing

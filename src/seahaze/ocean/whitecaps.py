@@ -277,8 +277,10 @@ class FoamField:
             return np.zeros(shape), np.full(shape, FOAM_REFLECTANCE)
         fraction = np.zeros(shape)
         albedo = np.zeros(shape)
+        q = None
         for level, weight in zip(self._levels, self._level_weights(spacing_m, shape), strict=True):
             if not np.any(weight > 0.0):
+                q = None
                 continue
             q = level.quantile(x0, y0)
             f = self._profile(q)
@@ -290,7 +292,8 @@ class FoamField:
             fraction > 0.0, albedo / np.maximum(fraction, 1e-300), FOAM_REFLECTANCE
         )
         if len(self._levels) == 1 or spacing_m is None:  # one level: exact where no foam too
-            q = self._levels[-1].quantile(x0, y0)
+            if q is None:  # the loop's last quantile is the finest level's, if it ran
+                q = self._levels[-1].quantile(x0, y0)
             reflectance = FRESH_FOAM_REFLECTANCE * np.exp(-FOAM_AGE_DECAY * q / self.coverage)
         return fraction, reflectance
 
