@@ -333,16 +333,18 @@ def _breaking_indicators(surface: OceanSurface) -> list[tuple[_BreakingIndicator
     the surface cannot break (flat). Low values mark breaking crests."""
     if isinstance(surface, FFTOcean):
         lam = surface.choppiness if surface.choppiness > 0.0 else 1.0
-        grids = [surface.patch_jacobian(i, lam) for i in range(len(surface.cascades))]
-        sizes = [c.size_m for c in surface.cascades]
+        sampled = _PatchSamples(
+            [surface.patch_jacobian(i, lam) for i in range(len(surface.cascades))],
+            [c.size_m for c in surface.cascades],
+        )
         levels: list[tuple[_BreakingIndicator, float]] = []
-        for count in range(1, len(grids) + 1):
+        for count in range(1, len(surface.cascades) + 1):
 
             def fft_indicator(x: np.ndarray, y: np.ndarray, count: int = count) -> np.ndarray:
-                total = sample_periodic_bilinear(grids[0][None], sizes[0], x, y)[0]
-                for grid, size in zip(grids[1:count], sizes[1:count], strict=True):
-                    detail = sample_periodic_bilinear(grid[None], size, x, y)[0] - 1.0
-                    total = total + DETAIL_WEIGHT * detail
+                patches = sampled(x, y, count)
+                total = patches[0]
+                for patch in patches[1:count]:
+                    total = total + DETAIL_WEIGHT * (patch - 1.0)
                 return total
 
             cascade = surface.cascades[count - 1]
@@ -365,6 +367,27 @@ def _breaking_indicators(surface: OceanSurface) -> list[tuple[_BreakingIndicator
             )
         return [(probe.jacobian, 0.0)]
     return []
+
+
+class _PatchSamples:
+    """The patches' Jacobians sampled at a set of rest positions, kept for the last positions
+    asked: every detail level's indicator adds one patch to the coarser level's, and the
+    levels are evaluated one after another at the same positions (a foam field's tabulation
+    sample, a mesh's vertices), so each patch is sampled there once, not once per level."""
+
+    def __init__(self, grids: list[np.ndarray], sizes_m: list[float]) -> None:
+        self.grids, self.sizes_m = grids, sizes_m
+        self._at: tuple[np.ndarray, np.ndarray] | None = None
+        self._values: list[np.ndarray] = []
+
+    def __call__(self, x: np.ndarray, y: np.ndarray, count: int) -> list[np.ndarray]:
+        """The first ``count`` patches' Jacobians at ``(x, y)`` (m)."""
+        if self._at is None or self._at[0] is not x or self._at[1] is not y:
+            self._at, self._values = (x, y), []  # holding x, y: their ids stay theirs
+        for k in range(len(self._values), count):
+            grid = self.grids[k][None]
+            self._values.append(sample_periodic_bilinear(grid, self.sizes_m[k], x, y)[0])
+        return self._values[:count]
 
 
 def _tabulation_sample(
