@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -197,8 +198,13 @@ def build_sea(
     params = ocean_params(spec)
     surface = ocean.make_surface(params) if surface is None else surface
     flat = isinstance(surface, ocean.FlatSurface)
-    foam = ocean.FoamField(surface, params.wind_speed) if spec.sea.whitecaps and not flat else None
-    wakes = ocean.WakeField(moving) if moving else None
+    # The whitecaps' tables and the ship waves are independent and mostly numpy work that
+    # releases the GIL (sorts, FFTs): one is built on a second thread while the other is.
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        whitecaps = spec.sea.whitecaps and not flat
+        foam_job = pool.submit(ocean.FoamField, surface, params.wind_speed) if whitecaps else None
+        wakes = ocean.WakeField(moving) if moving else None
+        foam = foam_job.result() if foam_job is not None else None
     mesh = ocean.build_sea_mesh_data(
         surface,
         camera_xy=(camera.x_m, camera.y_m),
