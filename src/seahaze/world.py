@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -177,11 +177,20 @@ class Sea:
         return self._triple()[index]
 
 
+def sea_whitecaps(spec: SceneSpec, surface: ocean.OceanSurface) -> ocean.FoamField | None:
+    """The whitecaps of ``surface`` for the scene's wind (``FoamField``); None on a flat sea or
+    with ``sea.whitecaps: false``."""
+    if not spec.sea.whitecaps or isinstance(surface, ocean.FlatSurface):
+        return None
+    return ocean.FoamField(surface, ocean_params(spec).wind_speed)
+
+
 def build_sea(
     spec: SceneSpec,
     camera: Camera,
     moving: Sequence[ocean.MovingVessel] = (),
     surface: ocean.OceanSurface | None = None,
+    whitecaps: Future[ocean.FoamField | None] | None = None,
 ) -> Sea:
     """The sea mesh to the horizon with its whitecaps and the waves and wakes of ``moving``
     vessels, its roughness and the surface for height queries (``surface``: reuse one).
@@ -194,17 +203,17 @@ def build_sea(
     vertex holding the whitecaps of its cell (none on a flat sea or with
     ``sea.whitecaps: false``), plus the wakes' foam. Waves, whitecaps and wakes are computed
     only where the camera can see them (``view`` of :func:`seahaze.ocean.build_sea_mesh_data`).
+    ``whitecaps``: :func:`sea_whitecaps` of ``surface`` being built elsewhere (a future).
     """
     params = ocean_params(spec)
     surface = ocean.make_surface(params) if surface is None else surface
-    flat = isinstance(surface, ocean.FlatSurface)
     # The whitecaps' tables and the ship waves are independent and mostly numpy work that
     # releases the GIL (sorts, FFTs): one is built on a second thread while the other is.
     with ThreadPoolExecutor(max_workers=1) as pool:
-        whitecaps = spec.sea.whitecaps and not flat
-        foam_job = pool.submit(ocean.FoamField, surface, params.wind_speed) if whitecaps else None
+        if whitecaps is None:
+            whitecaps = pool.submit(sea_whitecaps, spec, surface)
         wakes = ocean.WakeField(moving) if moving else None
-        foam = foam_job.result() if foam_job is not None else None
+        foam = whitecaps.result()
     mesh = ocean.build_sea_mesh_data(
         surface,
         camera_xy=(camera.x_m, camera.y_m),
@@ -492,9 +501,12 @@ def build_geometry(spec: SceneSpec, camera: Camera, frame: int | None = None) ->
     """
     elapsed = spec.sequence.time_s(frame) if frame is not None and spec.sequence else 0.0
     surface = ocean.make_surface(ocean_params(spec, elapsed))
-    instances = build_vessels(spec, camera, surface, frame)
-    moving = moving_vessels(instances) if spec.vessels.wakes else []
-    sea = build_sea(spec, camera, moving, surface)
+    # The whitecaps depend on the surface alone: built on a second thread meanwhile.
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        whitecaps = pool.submit(sea_whitecaps, spec, surface)
+        instances = build_vessels(spec, camera, surface, frame)
+        moving = moving_vessels(instances) if spec.vessels.wakes else []
+        sea = build_sea(spec, camera, moving, surface, whitecaps)
     return SceneGeometry(
         sea.mesh,
         sea.roughness,
