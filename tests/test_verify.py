@@ -100,8 +100,8 @@ def test_targets_are_where_they_should_be():
     targets = verify.layout_targets(camera, visibility)
     expected = verify.target_fractions() * visibility
     np.testing.assert_allclose([t.distance_m for t in targets], expected)
-    sea, roughness, surface = build_sea(spec, camera)
-    geometry = SceneGeometry(sea, roughness, surface, [t.instance() for t in targets])
+    sea = build_sea(spec, camera)
+    geometry = SceneGeometry(sea.mesh, sea.roughness, sea.surface, [t.instance() for t in targets])
     loaded = build_scene(spec, camera, geometry, [visibility], black_vessels=True)
     geo = passes.render_geometry(loaded)
     v_h = round(verify.horizon_row(camera))

@@ -17,10 +17,9 @@ lobe (docs/ocean.md, "Rendering the sea"). Explicit vessels move at their ``spee
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
-from typing import Any
 
 import numpy as np
 
@@ -155,10 +154,7 @@ def ocean_params(spec: SceneSpec, elapsed_s: float = 0.0) -> ocean.OceanParams:
 @dataclass(frozen=True)
 class Sea:
     """The sea of a scene: its mesh (with per-vertex foam and roughness mix), the roughness of
-    its two lobes, its foam coverage and the surface for height queries.
-
-    Unpacks (and indexes) as the ``(mesh, roughness, surface)`` triple of older callers.
-    """
+    its two lobes, its foam coverage and the surface for height queries."""
 
     mesh: MeshData
     roughness: float
@@ -166,15 +162,6 @@ class Sea:
     surface: ocean.OceanSurface
     roughness_near: float | None = None
     foam_coverage: float = 0.0
-
-    def _triple(self) -> tuple[MeshData, float, ocean.OceanSurface]:
-        return self.mesh, self.roughness, self.surface
-
-    def __iter__(self) -> Iterator[Any]:
-        return iter(self._triple())
-
-    def __getitem__(self, index: int) -> Any:
-        return self._triple()[index]
 
 
 def sea_whitecaps(spec: SceneSpec, surface: ocean.OceanSurface) -> ocean.FoamField | None:
@@ -199,21 +186,15 @@ def build_sea(
     Otherwise the slope budget of every vertex — Cox–Munk's total less what the vertex's
     band-limited, faded displacement resolves — as a mix of a near lobe (the sub-grid slopes
     at the finest spacing) and a far lobe (all slopes, the flat far sea):
-    :func:`seahaze.ocean.mesh_roughness`. Foam: ``FoamField`` on the breaking crests, each
-    vertex holding the whitecaps of its cell (none on a flat sea or with
-    ``sea.whitecaps: false``), plus the wakes' foam. Waves, whitecaps and wakes are computed
-    only where the camera can see them (``view`` of :func:`seahaze.ocean.build_sea_mesh_data`).
-    ``whitecaps``: :func:`sea_whitecaps` of ``surface`` being built elsewhere (a future).
+    :func:`seahaze.ocean.mesh_roughness`. Foam: :func:`sea_whitecaps` (``whitecaps``: a future
+    of it, built elsewhere) on the breaking crests, each vertex holding the whitecaps of its
+    cell, plus the wakes' foam. Waves, whitecaps and wakes are computed only where the camera
+    can see them (``view`` of :func:`seahaze.ocean.build_sea_mesh_data`).
     """
     params = ocean_params(spec)
     surface = ocean.make_surface(params) if surface is None else surface
-    # The whitecaps' tables and the ship waves are independent and mostly numpy work that
-    # releases the GIL (sorts, FFTs): one is built on a second thread while the other is.
-    with ThreadPoolExecutor(max_workers=1) as pool:
-        if whitecaps is None:
-            whitecaps = pool.submit(sea_whitecaps, spec, surface)
-        wakes = ocean.WakeField(moving) if moving else None
-        foam = whitecaps.result()
+    wakes = ocean.WakeField(moving) if moving else None
+    foam = sea_whitecaps(spec, surface) if whitecaps is None else whitecaps.result()
     mesh = ocean.build_sea_mesh_data(
         surface,
         camera_xy=(camera.x_m, camera.y_m),
@@ -501,7 +482,8 @@ def build_geometry(spec: SceneSpec, camera: Camera, frame: int | None = None) ->
     """
     elapsed = spec.sequence.time_s(frame) if frame is not None and spec.sequence else 0.0
     surface = ocean.make_surface(ocean_params(spec, elapsed))
-    # The whitecaps depend on the surface alone: built on a second thread meanwhile.
+    # The whitecaps depend on the surface alone: built on a second thread meanwhile (numpy's
+    # sorts and SciPy's FFTs release the GIL).
     with ThreadPoolExecutor(max_workers=1) as pool:
         whitecaps = pool.submit(sea_whitecaps, spec, surface)
         instances = build_vessels(spec, camera, surface, frame)

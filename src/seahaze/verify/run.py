@@ -25,7 +25,7 @@ from ..visibility import (
     extinction_coefficient,
     level_name,
 )
-from ..world import MeshData, SceneGeometry, build_sea
+from ..world import SceneGeometry, Sea, build_sea
 from .fit import fit_extinction, jackknife_visibility, measure_contrasts, visibility_or_nan
 from .targets import (
     DEFAULT_RESOLUTION,
@@ -146,7 +146,7 @@ class LevelMeasurement:
 
 def render_level_batches(
     spec: SceneSpec,
-    sea: tuple[MeshData, float, Any],
+    sea: Sea,
     visibility_m: float,
     level_index: int,
     batches: int,
@@ -158,7 +158,7 @@ def render_level_batches(
     camera = Camera.from_spec(spec.camera)
     haze = spec.haze
     targets = layout_targets(camera, visibility_m, width_deg=width_deg)
-    mesh, roughness, surface = sea
+    mesh, roughness, surface = sea.mesh, sea.roughness, sea.surface
     geometry = SceneGeometry(mesh, roughness, surface, [t.instance() for t in targets])
     farthest = max(t.distance_m for t in targets) + max(t.width_m for t in targets)
     # The haze box reaches past the farthest target, so the light around it is an unbounded
@@ -366,7 +366,7 @@ def run_verify(
             f"{name}: V measured {report.measured_m:.0f} m ({report.error:+.1%}) "
             f"in {report.seconds:.1f} s"
         )
-    config = _run_config(spec, settings, used_variant, sea[1], visibilities_m[0])
+    config = _run_config(spec, settings, used_variant, sea.roughness, visibilities_m[0])
     return VerifyReport(config, levels, time.perf_counter() - start)
 
 
