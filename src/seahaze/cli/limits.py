@@ -30,6 +30,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from ..fileio import cores
 from ..spec import SceneSpec
 
 MAX_SCENES = 10_000
@@ -92,10 +93,6 @@ class Estimate:
             f"{cores()} core(s) and {self.scene_bytes / 2**30:.1f} GiB per scene "
             "(cost model: docs/limits.md)"
         )
-
-
-def cores() -> int:
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
 def max_workers() -> int:

@@ -7,8 +7,7 @@ gets the same label file: the boxes do not depend on the haze.
 
 from __future__ import annotations
 
-import os
-from concurrent.futures import ThreadPoolExecutor, wait
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -28,21 +27,14 @@ def write_scene(layout: Layout, scene: SceneRender) -> None:
     name = scene.name
     images = [(CLEAN_LEVEL, scene.clean_image, scene.clean)]
     images += [(level.name, level.image, level.radiance) for level in scene.levels]
-    with ThreadPoolExecutor(max_workers=_writer_threads()) as pool:
+    with ThreadPoolExecutor(max_workers=min(4, fileio.cores())) as pool:
         writes = [pool.submit(_write_image, layout, *image, scene) for image in images]
-        wait(writes)
-    for write in writes:
+    for write in writes:  # the pool has waited for every write
         write.result()
     for level, _, _ in images:
         fileio.write_text(layout.label(level, name), scene.label_text)
     fileio.write_exr(layout.depth(name), {"Z": scene.geometry.distance_m})
     fileio.write_json(layout.meta(name), scene.meta)
-
-
-def _writer_threads() -> int:
-    """Threads for the image writes: the CPUs this process may use, at most four."""
-    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    return max(1, min(4, cpus or 1))
 
 
 def _write_image(

@@ -91,26 +91,27 @@ def owned_floats(values: np.ndarray) -> Any:
     straight from numpy may keep numpy's buffer, whose alignment depends on where numpy put it;
     drjit compiles packet gathers only from an aligned source, so the kernel (and its hash)
     would change from one scene to the next and be compiled again."""
-    import drjit as dr
     import mitsuba as mi
 
-    array = mi.Float(np.ascontiguousarray(values, np.float32).ravel())
-    array = array + dr.opaque(mi.Float, 0.0)  # computed: a fresh, aligned allocation
-    dr.eval(array)
-    return array
+    return _owned(mi.Float, np.ascontiguousarray(values, np.float32).ravel())
 
 
 def owned_indices(values: np.ndarray) -> Any:
     """``values`` as an evaluated drjit UInt32 array in drjit's own memory, at least two long
     (a one-element array would be a scalar, another kernel): :func:`owned_floats` for the
     indices of a gather; a one-element ``values`` is repeated."""
-    import drjit as dr
     import mitsuba as mi
 
     values = np.ascontiguousarray(values, np.uint32).ravel()
-    if len(values) == 1:
-        values = np.repeat(values, 2)
-    array = mi.UInt32(values) + dr.opaque(mi.UInt32, 0)
+    return _owned(mi.UInt32, np.repeat(values, 2) if len(values) == 1 else values)
+
+
+def _owned(array_type: Any, values: np.ndarray) -> Any:
+    """``array_type`` of ``values``, computed (hence a fresh, aligned allocation) and
+    evaluated."""
+    import drjit as dr
+
+    array = array_type(values) + dr.opaque(array_type, 0)
     dr.eval(array)
     return array
 
