@@ -125,6 +125,31 @@ class SceneSession:
         return passes.render_clean(self.loaded, spp or render.spp, render.seed, haze.albedo, haze.g)
 
 
+@contextmanager
+def _fresh_registry() -> Iterator[None]:
+    """Build a scene's Mitsuba objects with the registry ids a fresh process would give them.
+
+    drjit traces a virtual call over every live instance of a type, and a kernel's hash
+    includes the instances' registry ids (a new object takes the lowest free one). So before
+    the scene is built, the earlier scene's objects are freed — after drjit's queued kernels
+    are done with them, and those in reference cycles by a collection — and while it is
+    built no automatic collection runs: one would free some other cyclic temporary at a
+    moment set by every thread's allocations, and the scene's next objects would take its id.
+    Otherwise a batch scene now and then compiles its render kernel again (render/fleet.py).
+    """
+    import drjit as dr
+
+    dr.sync_thread()
+    gc.collect()
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
+
+
 def open_session(
     spec: SceneSpec,
     geometry: SceneGeometry | None = None,
@@ -145,12 +170,8 @@ def open_session(
     camera = frame_camera(spec, frame)
     with _timed(timings, "geometry_build"):
         geometry = build_geometry(spec, camera, frame) if geometry is None else geometry
-    with _timed(timings, "scene_load"):
-        # drjit traces a virtual call over every live instance of a type: BSDFs of an earlier
-        # scene that reference cycles still keep alive would join this scene's calls and make
-        # its kernel differ from the compiled one (render/fleet.py). Free them first.
-        gc.collect()
-        # The physical mode computes the haze itself: no Mitsuba medium in its scene.
+    # The physical mode computes the haze itself: no Mitsuba medium in its scene.
+    with _timed(timings, "scene_load"), _fresh_registry():
         loaded = build_scene(
             spec,
             camera,
