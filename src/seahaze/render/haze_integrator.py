@@ -27,7 +27,9 @@ the next surface or out to the sky), for each level ``k`` of extinction ``σ_k``
   strategy): ``sunsky`` draws one direction from a mixture (61 % sun, 39 % sky on the default
   scene), so a sunlit hull got the sun in only some samples, the largest source of its noise
   (docs/benchmarks.md, "Ground-truth noise"). The sun's aureole in the haze is sampled from
-  each surface too (:meth:`sample_aureole`), against the BSDF sample's unshadowed sun.
+  each surface too (:meth:`sample_aureole`), against the BSDF sample's unshadowed sun. A hull
+  facing the sea's sun glint draws most of its next directions toward the glint
+  (:meth:`continue_path`).
 
 The surfaces a path meets, its BSDF samples and its shadow rays do not depend on the haze, so
 they are drawn once: the clean image (the path without haze) and every level come from the
@@ -48,7 +50,7 @@ from typing import Any
 import numpy as np
 
 from ..haze import HAZE_BOTTOM_M
-from . import jit_haze
+from . import glint_lobe, jit_haze
 from .sun_disk import disk_irradiance, sun_axis, sun_cone_cos
 from .table_texture import TableTexture
 
@@ -129,13 +131,17 @@ def make_integrator(
     top_m: float,
     bounces: int = DEFAULT_BOUNCES,
     camera_points: int = CAMERA_POINTS,
+    wind_speed: float = 6.0,
+    glint_share: float = glint_lobe.GLINT_SHARE,
 ) -> Any:
     """A new haze integrator for ``n_levels`` hazy levels (class defined lazily: it needs a
     Mitsuba variant). ``grey`` levels have one extinction for R, G and B (a third of the
     exponentials). ``sun`` is the emitter whose single scattering is computed with shadow rays
     (the sun part of the scene's ``sunsky``); everything else scattered in the haze comes from
     the tables. ``sun`` and ``sky`` (the scene's ``sunsky`` split in two) are the lights the
-    surfaces sample, one sample each per surface interaction.
+    surfaces sample, one sample each per surface interaction. ``wind_speed`` (m/s, the sea's)
+    sets the width of the sun glint's lobe, of which a hull facing it draws ``glint_share`` of
+    its next directions (:mod:`seahaze.render.glint_lobe`).
     """
     import drjit as dr
     import mitsuba as mi
@@ -156,6 +162,11 @@ def make_integrator(
             self.sun_cos = opaque_scalar(cos_max)
             self.sun_pdf = opaque_scalar(1.0 / (2.0 * np.pi * (1.0 - cos_max)))
             self.sun_irradiance = mi.Color3f(*(opaque_scalar(c) for c in disk_irradiance(sun)))
+            # Where the sea's sun glint lies seen from a hull (glint_lobe module).
+            axis = sun_axis(sun)
+            self.glint_axis = mi.Vector3f(*map(opaque_scalar, glint_lobe.mirror_axis(axis)))
+            self.glint_share = opaque_scalar(glint_lobe.lobe_share(axis, glint_share))
+            self.glint_kappa = opaque_scalar(glint_lobe.lobe_kappa(wind_speed))
             self.top, self.bottom = top_m, HAZE_BOTTOM_M
             self.set_levels(
                 np.full((n_levels, 3), 1e-3),
@@ -270,12 +281,13 @@ def make_integrator(
             """Solid-angle density of :meth:`sample_aureole`'s directions."""
             return jit_haze.hg_phase(dr.dot(self.sun_axis, d), self.g)
 
-        def sample_aureole(self, scene, sampler, si, bsdf, ctx, beta, att, res, active):
+        def sample_aureole(self, scene, sampler, si, bsdf, ctx, share, beta, att, res, active):
             """The sun's single scattering in the haze as a light seen from a surface: one
             direction drawn from the phase function around the sun, weighted against BSDF
             sampling by the power heuristic. The aureole is broad and bright (the HG peak is
             125× its side at g = 0.75), and a glossy sea's BSDF samples found it rarely: it was
-            most of a level's own noise near the camera (docs/physics.md, "The aureole")."""
+            most of a level's own noise near the camera (docs/physics.md, "The aureole").
+            ``share``: the surface's glint share (:meth:`glint_share_at`)."""
             cos_t = jit_haze.hg_sample_cos(sampler.next_1d(active), self.g)
             phi = 2.0 * dr.pi * sampler.next_1d(active)
             axis = (self.sun_axis.x, self.sun_axis.y, self.sun_axis.z)
@@ -288,7 +300,8 @@ def make_integrator(
             enter, length = self.slab_length(ray.o, d, dr.select(hit.is_valid(), hit.t, dr.inf))
             active &= length > 0.0
             sun_d, lit, source = self.sun_source(sampler, active, d)
-            weight = beta * value * _mis(pdf, bsdf_pdf) / dr.maximum(pdf, 1e-30)
+            mis = _mis(pdf, self.continuation_pdf(share, bsdf_pdf, d))
+            weight = beta * value * mis / dr.maximum(pdf, 1e-30)
             for k in range(self.n_levels):
                 sun = self.sun_unshadowed(k, source, ray, enter, length, sun_d.z)
                 res[k] += dr.select(lit, att[k] * weight * sun, 0.0)
@@ -409,12 +422,13 @@ def make_integrator(
             bsdf = si.bsdf(p.ray)
             active = p.active
             smooth = active & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+            share = self.glint_share_at(si, bsdf, active)
             for sample_light in (self.sample_sun, self.sky.sample_direction):
                 ds_e, em_w = sample_light(si, sampler.next_2d(smooth), smooth)
                 drawn = smooth & (ds_e.pdf > 0)
                 drawn &= ~scene.ray_test(si.spawn_ray(ds_e.d), drawn)
                 value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(ds_e.d), drawn)
-                mis_e = _mis(ds_e.pdf, bsdf_pdf)
+                mis_e = _mis(ds_e.pdf, self.continuation_pdf(share, bsdf_pdf, ds_e.d))
                 direct = dr.select(drawn, p.beta * value * em_w * mis_e, 0.0)
                 # Where nothing was drawn the direction may be NaN (the sky's sampler at
                 # the ends of its erfinv): its transmittance would make 0 · NaN = NaN.
@@ -425,19 +439,55 @@ def make_integrator(
                     lit = p.att[k] * self.transmittance(k, e_length) * direct
                     p.res[k] += dr.select(drawn, lit, 0.0)
 
-            self.sample_aureole(scene, sampler, si, bsdf, ctx, p.beta, p.att, p.res, smooth)
+            self.sample_aureole(scene, sampler, si, bsdf, ctx, share, p.beta, p.att, p.res, smooth)
 
-            bs, bsdf_weight = bsdf.sample(
-                ctx, si, sampler.next_1d(active), sampler.next_2d(active), active
-            )
+            bs, bsdf_weight, wo, pdf = self.continue_path(sampler, si, bsdf, ctx, share, active)
             p.beta = dr.select(active, p.beta * bsdf_weight, p.beta)
             active &= dr.any(p.beta != 0.0)
             p.prev_si = dr.select(active, si, p.prev_si)
-            p.prev_pdf = dr.select(active, bs.pdf, p.prev_pdf)
+            p.prev_pdf = dr.select(active, pdf, p.prev_pdf)
             delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
             p.prev_delta = dr.select(active, delta, p.prev_delta)
-            p.ray = dr.select(active, si.spawn_ray(si.to_world(bs.wo)), p.ray)
+            p.ray = dr.select(active, si.spawn_ray(wo), p.ray)
             p.active = active
+
+        def glint_share_at(self, si, bsdf, active):
+            """The share of ``si``'s continuation directions drawn toward the sea's sun glint
+            (:meth:`continue_path`): the integrator's glint share on a surface that faces the
+            sun's mirror image in the sea and has no delta lobe, 0 elsewhere (the sea itself:
+            its normals point up, the glint down)."""
+            facing = dr.dot(si.n, self.glint_axis) > 0.0
+            guided = active & facing & ~mi.has_flag(bsdf.flags(), mi.BSDFFlags.Delta)
+            return dr.select(guided, self.glint_share, 0.0)
+
+        def continuation_pdf(self, share, bsdf_pdf, d):
+            """Solid-angle density of direction ``d`` (world) under the surface's continuation
+            mixture: the BSDF's density ``bsdf_pdf`` and the glint lobe's, ``share`` of it. The
+            lights' MIS weights are taken against this density, not the BSDF's alone, so that
+            the weights of a direction still sum to one (Veach 1997, §9.2)."""
+            lobe = glint_lobe.lobe_pdf(self.glint_axis, self.glint_kappa, d)
+            return (1.0 - share) * bsdf_pdf + share * lobe
+
+        def continue_path(self, sampler, si, bsdf, ctx, share, active):
+            """The next direction of a path leaving ``si``: the BSDF sample ``bs``, the path's
+            weight ``f cos / pdf``, the direction (world) and its density, from a one-sample
+            mixture (Veach 1997, §9.2.4) of BSDF sampling and, with probability ``share``
+            (:meth:`glint_share_at`), the sun glint's lobe (:mod:`~seahaze.render.glint_lobe`).
+
+            One 1-D and one 2-D number, as BSDF sampling alone takes: the 1-D one picks the
+            strategy and is rescaled for the BSDF, the 2-D one drives the one picked. Where
+            ``share`` is 0 (the sea) the path is the BSDF's, bit for bit."""
+            u, u2 = sampler.next_1d(active), sampler.next_2d(active)
+            guided = share > 0.0
+            pick = guided & (u < share)
+            u_bsdf = dr.select(guided, (u - share) / (1.0 - share), u)
+            bs, weight = bsdf.sample(ctx, si, dr.clip(u_bsdf, 0.0, 0.99999994), u2, active)
+            lobe = glint_lobe.lobe_sample(self.glint_axis, self.glint_kappa, u2)
+            wo = dr.select(pick, lobe, si.to_world(bs.wo))
+            value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(wo), guided)
+            pdf = self.continuation_pdf(share, bsdf_pdf, wo)
+            weight = dr.select(guided, value / dr.maximum(pdf, 1e-30), weight)
+            return bs, weight, wo, dr.select(guided, pdf, bs.pdf)
 
         def aov_names(self):
             return [f"{k}.{c}" for k in range(self.n_levels) for c in "RGB"]

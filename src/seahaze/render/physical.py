@@ -167,6 +167,7 @@ class PhysicalRenderer:
         self.sun = mi.load_dict(sunsky_dict(spec, sky=False))
         self.sky = mi.load_dict(sunsky_dict(spec, sun=False))
         self.sun_azimuth_rad = math.radians(spec.sun.azimuth_deg)
+        self.wind_speed = spec.sea.wind_speed  # the width of the sun glint seen from a hull
         self.bounces, self.photons = bounces, photons
         self._sea = sample_sea_reflectance(
             _sea_bsdf(loaded.scene),
@@ -247,7 +248,7 @@ class PhysicalRenderer:
         if key not in self._integrators:
             top = self.loaded.haze_top_m
             self._integrators[key] = make_integrator(
-                self.sun, self.sky, n_levels, grey, top, self.bounces
+                self.sun, self.sky, n_levels, grey, top, self.bounces, wind_speed=self.wind_speed
             )
         return self._integrators[key]
 
