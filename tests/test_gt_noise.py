@@ -38,7 +38,7 @@ def test_sun_cone_sampling_integrates_the_sun_disk() -> None:
     spec = small_spec(sun={"elevation_deg": 28.0, "azimuth_deg": 150.0})
     sun = mi.load_dict(sunsky_dict(spec, sky=False))
     sky = mi.load_dict(sunsky_dict(spec, sun=False))
-    integrator = make_integrator(sun, sky, 1, True, 300.0)
+    integrator = make_integrator(sun, sky, 1, True, 300.0, wind_speed=spec.sea.wind_speed)
     n = 200_000
     it = dr.zeros(mi.Interaction3f, n)
     it.p = mi.Point3f(0.0, 0.0, 10.0)

@@ -131,7 +131,8 @@ def make_integrator(
     top_m: float,
     bounces: int = DEFAULT_BOUNCES,
     camera_points: int = CAMERA_POINTS,
-    wind_speed: float = 6.0,
+    *,
+    wind_speed: float,
     glint_share: float = glint_lobe.GLINT_SHARE,
 ) -> Any:
     """A new haze integrator for ``n_levels`` hazy levels (class defined lazily: it needs a
