@@ -50,14 +50,14 @@ CONFIRM_MEMORY_FRACTION = 0.8
 """A scene estimated to need more than this share of the machine's memory needs ``--yes``."""
 
 # measured by scripts/measure_cost_model.py (docs/benchmarks.md, "Cost model"); CPU seconds
-SETUP_CORE_S = {"low": 2.18, "medium": 2.39, "high": 5.44}
-CLEAN_CORE_S = 9.35e-07
-WRITE_CORE_S = 1.34e-06
-PHYSICAL_PASS_CORE_S = 2.95e-06
-PHYSICAL_LEVEL_CORE_S = 1.7e-07
-PHYSICAL_TABLE_S = {50.0: 1.15, 300.0: 0.43, 4000.0: 0.26}
-REFERENCE_CORE_S = {50.0: 1.73e-05, 300.0: 1.15e-05, 4000.0: 6.83e-06}
-ASM_LEVEL_S = {50.0: 1.52, 300.0: 1.23, 4000.0: 0.9}
+SETUP_CORE_S = {"low": 2.08, "medium": 2.12, "high": 4.14}
+CLEAN_CORE_S = 1.03e-06
+WRITE_CORE_S = 1.76e-06
+PHYSICAL_PASS_CORE_S = 2.14e-06
+PHYSICAL_LEVEL_CORE_S = 1.36e-07
+PHYSICAL_TABLE_S = {50.0: 0.95, 300.0: 0.31, 4000.0: 0.21}
+REFERENCE_CORE_S = {50.0: 2.34e-05, 300.0: 1.33e-05, 4000.0: 7.5e-06}
+ASM_LEVEL_S = {50.0: 1.65, 300.0: 1.43, 4000.0: 1.08}
 
 VALIDATED_FROM_M = {"physical": 100.0}
 """Thinnest visibility (m) down to which the mode is within 3 % of converged ``reference``
