@@ -20,7 +20,6 @@ Usage: python scripts/bench_glint.py [--res 1280x720] [--spp 42]
 from __future__ import annotations
 
 import argparse
-import functools
 import os
 import platform
 import sys
@@ -31,7 +30,7 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_gt_noise import SEED, _res, _session
+from bench_gt_noise import SEED, _res, _session, two_seed_psnr
 from bench_passes import replace_section
 from measure_gt_variance import regions
 
@@ -46,19 +45,14 @@ CROP = (48, 120)
 def clean_pair(session: Any, spec: Any, share: float, spp: int) -> tuple[list[np.ndarray], float]:
     """The clean image at two sampler seeds with glint share ``share``, and the second pass's
     time (s)."""
-    from seahaze.render import haze_integrator, physical
+    from seahaze.render.physical import PhysicalRenderer
 
-    make = functools.partial(haze_integrator.make_integrator, glint_share=share)
-    original, physical.make_integrator = physical.make_integrator, make
-    try:
-        renderer = physical.PhysicalRenderer(session.loaded, spec)
-        images, seconds = [], 0.0
-        for seed in (SEED, SEED + 1):
-            start = time.perf_counter()
-            images.append(renderer.render([], spec.haze.albedo, spec.haze.g, spp, seed).clean)
-            seconds = time.perf_counter() - start
-    finally:
-        physical.make_integrator = original
+    renderer = PhysicalRenderer(session.loaded, spec, glint_share=share)
+    images, seconds = [], 0.0
+    for seed in (SEED, SEED + 1):
+        start = time.perf_counter()
+        images.append(renderer.render([], spec.haze.albedo, spec.haze.g, spp, seed).clean)
+        seconds = time.perf_counter() - start
     return images, seconds
 
 
@@ -66,10 +60,7 @@ def noise(images: list[np.ndarray], masks: dict[str, np.ndarray], exposure: floa
     """PSNR of one image's 8-bit noise and each region's relative rms luminance noise."""
     from seahaze import imaging
 
-    a8, b8 = (imaging.to_srgb8(x, exposure).astype(np.float64) for x in images)
-    out: dict[str, float] = {
-        "psnr": float(10 * np.log10(255.0**2 / (0.5 * np.mean((a8 - b8) ** 2))))
-    }
+    out: dict[str, float] = {"psnr": two_seed_psnr(*images, exposure)}
     ya, yb = (imaging.luminance(x) for x in images)
     for name, mask in masks.items():
         mean = 0.5 * (ya[mask].mean() + yb[mask].mean())

@@ -291,6 +291,16 @@ def write_section(
     replace_section("gt-noise", "\n".join(lines), "scripts/bench_gt_noise.py")
 
 
+def two_seed_psnr(a: np.ndarray, b: np.ndarray, exposure: float) -> float:
+    """PSNR (dB) of one image's noise from two renders ``a``, ``b`` that differ only in the
+    sampler seed, on their 8-bit sRGB images: ``10 log10(255² / (½ mean (a − b)²))``."""
+    from seahaze import imaging
+
+    a8 = imaging.to_srgb8(a, exposure).astype(np.float64)
+    b8 = imaging.to_srgb8(b, exposure).astype(np.float64)
+    return float(10.0 * np.log10(255.0**2 / (0.5 * np.mean((a8 - b8) ** 2))))
+
+
 def seeds(res: tuple[int, int], spp: int) -> None:
     """Noise-only PSNR of the clean image and every level at ``res`` from two sampler seeds
     (module docstring); updates ``out/gt_noise/seeds.json`` and the section."""
@@ -311,11 +321,7 @@ def seeds(res: tuple[int, int], spp: int) -> None:
     geo = session.pixels
     mean_clean = 0.5 * (runs[0][0] + runs[1][0])
     exposure = imaging.auto_exposure(mean_clean, geo.distance_m, geo.elevation_deg())
-    psnr = []
-    for a, b in zip(*runs, strict=True):
-        a8 = imaging.to_srgb8(a, exposure).astype(np.float64)
-        b8 = imaging.to_srgb8(b, exposure).astype(np.float64)
-        psnr.append(float(10.0 * np.log10(255.0**2 / (0.5 * np.mean((a8 - b8) ** 2)))))
+    psnr = [two_seed_psnr(a, b, exposure) for a, b in zip(*runs, strict=True)]
     store = OUT / "seeds.json"
     results = json.loads(store.read_text()) if store.exists() else {}
     key = f"{res[0]}x{res[1]} {spp}"

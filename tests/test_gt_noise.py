@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
-from conftest import small_spec
-from seahaze.render import denoise, physical
+from conftest import box_vessel, load_flat_scene, small_spec
+from seahaze.render import denoise, passes, physical
 from seahaze.render.glint_lobe import GLINT_SHARE
 from seahaze.render.scene import sunsky_dict
 from seahaze.spec import with_overrides
@@ -169,11 +169,6 @@ def _glint_wall_renders(share: float, seeds: range) -> tuple[list[np.ndarray], n
     """Clean renders of a wall standing on a flat, nearly smooth sea (α 0.05) and facing the
     sun's mirror image in it (sun 30° high behind the camera), the continuation directions
     drawn toward the glint with probability ``share``; and the wall's pixel mask."""
-    import functools
-
-    from conftest import box_vessel, load_flat_scene
-    from seahaze.render import haze_integrator, passes
-
     spec = small_spec(
         camera={"resolution": [48, 27], "fov_deg": 40.0, "pitch_deg": -4.0},
         sun={"elevation_deg": 30.0, "azimuth_deg": 160.0},
@@ -182,14 +177,8 @@ def _glint_wall_renders(share: float, seeds: range) -> tuple[list[np.ndarray], n
     wall = box_vessel(0, (120.0, 0.0, 8.0), (10.0, 30.0, 16.0))
     loaded, _ = load_flat_scene(spec, [wall], (), haze_box=False)
     mask = passes.render_geometry(loaded).instance == 0
-    renderer = physical.PhysicalRenderer(loaded, spec)
-    make = functools.partial(haze_integrator.make_integrator, glint_share=share)
-    original, physical.make_integrator = physical.make_integrator, make
-    try:
-        images = [renderer.render([], 0.998, 0.75, 16, seed).clean for seed in seeds]
-    finally:
-        physical.make_integrator = original
-    return images, mask
+    renderer = physical.PhysicalRenderer(loaded, spec, glint_share=share)
+    return [renderer.render([], 0.998, 0.75, 16, seed).clean for seed in seeds], mask
 
 
 def test_the_glint_lobe_is_unbiased_and_lowers_a_lit_walls_noise() -> None:

@@ -20,6 +20,7 @@ from ..haze import Extinction, extinction_rgb
 from ..ocean.whitecaps import FOAM_REFLECTANCE
 from ..spec import SceneSpec
 from .diffuse_table import DEFAULT_GRID, TableGrid, build_tables
+from .glint_lobe import GLINT_SHARE
 from .haze_integrator import DEFAULT_BOUNCES, make_integrator
 from .jit_haze import owned_floats
 from .passes import render_radiance
@@ -159,7 +160,11 @@ class PhysicalRenderer:
         spec: SceneSpec,
         bounces: int = DEFAULT_BOUNCES,
         photons: int = TABLE_PHOTONS,
+        glint_share: float = GLINT_SHARE,
     ):
+        """``glint_share``: the share of a hull's next directions drawn toward the sea's sun
+        glint (:mod:`~seahaze.render.glint_lobe`; 0 for BSDF sampling alone, as benchmarks
+        and tests compare)."""
         mi = _mi()
         self.loaded = loaded
         # The sun and the sky as separate emitters: the sun's single scattering is computed
@@ -168,7 +173,7 @@ class PhysicalRenderer:
         self.sky = mi.load_dict(sunsky_dict(spec, sun=False))
         self.sun_azimuth_rad = math.radians(spec.sun.azimuth_deg)
         self.wind_speed = spec.sea.wind_speed  # the width of the sun glint seen from a hull
-        self.bounces, self.photons = bounces, photons
+        self.bounces, self.photons, self.glint_share = bounces, photons, glint_share
         self._sea = sample_sea_reflectance(
             _sea_bsdf(loaded.scene),
             foam_coverage=loaded.sea_foam_coverage,
@@ -248,7 +253,14 @@ class PhysicalRenderer:
         if key not in self._integrators:
             top = self.loaded.haze_top_m
             self._integrators[key] = make_integrator(
-                self.sun, self.sky, n_levels, grey, top, self.bounces, wind_speed=self.wind_speed
+                self.sun,
+                self.sky,
+                n_levels,
+                grey,
+                top,
+                self.bounces,
+                wind_speed=self.wind_speed,
+                glint_share=self.glint_share,
             )
         return self._integrators[key]
 
