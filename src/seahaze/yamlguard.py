@@ -107,21 +107,30 @@ def compose_limited(text: str) -> tuple[Any, yaml.Node | None]:
 
 def _check_nesting(text: str) -> None:
     """Refuse nesting deeper than :data:`MAX_YAML_DEPTH` on the event stream, at the first
-    level too deep. Syntax errors are left to the composer, which reports their line."""
+    level too deep. Syntax errors are left to the composer, which reports their line.
+
+    libyaml 0.2.5 as bundled with PyYAML 6.0.4 refuses 1000 levels itself, and its scanner
+    reads up to 1024 characters ahead of the event it hands out (to find simple keys), so a
+    line of ``[`` can hit that limit before the 33rd event: it is the same refusal.
+    """
     depth = 0
     try:
         for event in yaml.parse(text, Loader=_LOADER):
             if isinstance(event, yaml.CollectionStartEvent):
                 depth += 1
                 if depth > MAX_YAML_DEPTH:
-                    raise YamlLimitError(
-                        event.start_mark.line + 1,
-                        f"nested deeper than {MAX_YAML_DEPTH} levels; a scene needs 5",
-                    )
+                    raise _too_deep(event.start_mark.line + 1)
             elif isinstance(event, yaml.CollectionEndEvent):
                 depth -= 1
-    except yaml.YAMLError:
-        pass
+    except yaml.YAMLError as exc:
+        if "nesting depth" in str(getattr(exc, "problem", "")):
+            mark = getattr(exc, "problem_mark", None)
+            raise _too_deep(mark.line + 1 if mark is not None else 0) from None
+
+
+def _too_deep(line: int) -> YamlLimitError:
+    """The refusal of text nested deeper than :data:`MAX_YAML_DEPTH`, at 1-based ``line``."""
+    return YamlLimitError(line, f"nested deeper than {MAX_YAML_DEPTH} levels; a scene needs 5")
 
 
 def _check_structure(root: yaml.Node) -> None:
