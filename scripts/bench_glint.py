@@ -3,14 +3,14 @@
 A sunlit hull is lit by the sea's sun glint, a caustic that the hull's cosine-weighted BSDF
 samples find only now and then (``scripts/measure_gt_variance.py``: ~8 % rms on the ferry). The
 ``physical`` integrator draws a share of a hull's continuation directions from a lobe around the
-sun's mirror image in the sea (:meth:`HazeIntegrator.continue_path`). This script renders the
-default scene's clean image with that share at 0 (BSDF sampling alone, the renderer before it)
-and at :data:`~seahaze.render.glint_lobe.GLINT_SHARE`, each at two sampler seeds, and
-reports per region (sky, sea, each vessel class) the rms per-pixel noise of the luminance
-relative to the region's mean (``√(½ mean (a − b)²)``, no converged render needed), the PSNR of
-the 8-bit image's noise, and the pass's time (the second seed's, warm). It writes the
-"glint" section of docs/benchmarks.md and a crop figure of the ferry and the fishing boat at
-100 % and ×3, nearest-neighbour (docs/images/glint_crop.png).
+sun's mirror image in the sea (:meth:`seahaze.render.glint_lobe.GlintLobe.continue_path`).
+This script renders the default scene's clean image with that share at 0 (BSDF sampling alone,
+the renderer before it) and at :data:`~seahaze.render.glint_lobe.GLINT_SHARE`, each at two
+sampler seeds, and reports per region (sky, sea, each vessel class) the rms per-pixel noise of
+the luminance relative to the region's mean (``√(½ mean (a − b)²)``, no converged render
+needed), the PSNR of the 8-bit image's noise, and the pass's time (the second seed's, warm). It
+writes the "glint" section of docs/benchmarks.md and a crop figure of the ferry and the fishing
+boat at 100 % and ×3, nearest-neighbour (docs/images/glint_crop.png).
 
 Whether the lobe is unbiased is a test (tests/test_gt_noise.py), not this script's business.
 

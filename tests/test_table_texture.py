@@ -26,47 +26,83 @@ def _linear_tables() -> np.ndarray:
     return (field[..., None] + offsets).astype(np.float32)
 
 
-def test_lookup_interpolates_a_linear_table_exactly(mitsuba_variant) -> None:
-    """Linear interpolation reproduces a linear field: inside the bin centres every lookup is
-    the field itself, to half a fine height bin in z, for every level and channel."""
-    import drjit as dr
-    import mitsuba as mi
-
-    rng = np.random.default_rng(5)
-    n = 3000
-    sun_azimuth = 0.7
+def _random_queries(n: int, sun_azimuth: float, seed: int = 5):
+    """Travel directions and heights inside the bin centres, as numpy arrays: μ, folded
+    azimuth φ, the direction (n, 3) and the relative height."""
+    rng = np.random.default_rng(seed)
     mu = rng.uniform(-1.0 + 1.0 / N_MU, 1.0 - 1.0 / N_MU, n)
     phi = rng.uniform(np.pi / (2 * N_PHI), np.pi - np.pi / (2 * N_PHI), n)
     side = rng.choice([-1.0, 1.0], n)  # the table is folded: ±φ from the sun look the same
     azimuth = sun_azimuth + side * phi
     s = np.sqrt(1.0 - mu**2)
-    travel = mi.Vector3f(s * np.cos(azimuth), s * np.sin(azimuth), mu)
-    height = rng.uniform(0.5 / N_Z, 1.0 - 0.5 / N_Z, n)
+    travel = np.stack([s * np.cos(azimuth), s * np.sin(azimuth), mu], axis=1)
+    return mu, phi, travel, rng.uniform(0.5 / N_Z, 1.0 - 0.5 / N_Z, n)
 
+
+def test_lookups_average_to_bilinear_interpolation(mitsuba_variant) -> None:
+    """Each lookup reads one texel, chosen with probability its bilinear weight: averaged over
+    stratified picks, a linear field comes back as the field itself (to half a fine height bin
+    in z and the picks' 1/N stratification), for every level and channel."""
+    import drjit as dr
+    import mitsuba as mi
+
+    n, picks, sun_azimuth = 200, 512, 0.7
+    mu, phi, travel, height = _random_queries(n, sun_azimuth)
+    rep = lambda a: np.repeat(a, picks, axis=0)  # noqa: E731
+    u = np.tile((np.arange(picks) + 0.5) / picks, n)
     texture = TableTexture(_linear_tables(), LEVELS)
     cos_sun, sin_sun = (dr.opaque(mi.Float, f(sun_azimuth)) for f in (np.cos, np.sin))
-    lookup = texture.toward(travel, cos_sun, sin_sun)
+    d = rep(travel)
+    lookup = texture.toward(mi.Vector3f(d[:, 0], d[:, 1], d[:, 2]), cos_sun, sin_sun, mi.Float(u))
     field = SLOPE_MU * mu + SLOPE_PHI * phi + SLOPE_Z * height
-    z_step = SLOPE_Z * 0.5 / (N_Z * Z_UPSAMPLE)
+    # A texel's value differs from its neighbour's by at most the slope × the bin width; a
+    # stratified choice between two is off by at most 1/picks of it per axis.
+    texel_step = SLOPE_MU * 2.0 / N_MU + SLOPE_PHI * np.pi / N_PHI
+    tolerance = SLOPE_Z * 0.5 / (N_Z * Z_UPSAMPLE) + 2.0 * texel_step / picks + 1e-4
     for level in range(LEVELS):
-        rgb = lookup(level, mi.Float(height))
+        rgb = lookup(level, mi.Float(rep(height)))
         for c in range(3):
+            mean = np.array(rgb[c]).reshape(n, picks).mean(axis=1)
             expected = field + 10.0 * (3 * level + c + 1)
-            np.testing.assert_allclose(np.array(rgb[c]), expected, atol=z_step + 1e-4)
+            np.testing.assert_allclose(mean, expected, atol=tolerance)
+
+
+def test_each_lookup_is_one_texel(mitsuba_variant) -> None:
+    """A single lookup returns one of the four texels around the direction (not a blend), at
+    the fine height bin of the query: the choice adds noise, never a value of its own."""
+    import drjit as dr
+    import mitsuba as mi
+
+    n, sun_azimuth = 500, 0.7
+    mu, phi, travel, height = _random_queries(n, sun_azimuth, seed=9)
+    u = np.random.default_rng(2).random(n)
+    texture = TableTexture(_linear_tables(), LEVELS)
+    cos_sun, sin_sun = (dr.opaque(mi.Float, f(sun_azimuth)) for f in (np.cos, np.sin))
+    d = mi.Vector3f(travel[:, 0], travel[:, 1], travel[:, 2])
+    value = np.array(texture.toward(d, cos_sun, sin_sun, mi.Float(u))(0, mi.Float(height))[0])
+    fine = texture.values.numpy().reshape(N_MU, N_PHI, N_Z * Z_UPSAMPLE, LEVELS, 4)
+    i_mu = np.floor((mu + 1.0) * 0.5 * N_MU - 0.5).astype(int)
+    i_phi = np.floor(phi / np.pi * N_PHI - 0.5).astype(int)
+    i_z = np.floor(height * N_Z * Z_UPSAMPLE).astype(int)
+    corners = np.stack(
+        [fine[i_mu + a, i_phi + b, i_z, 0, 0] for a in (0, 1) for b in (0, 1)], axis=1
+    )
+    assert np.all(np.min(np.abs(corners - value[:, None]), axis=1) < 1e-5)
 
 
 def test_lookup_clamps_at_the_table_edges(mitsuba_variant) -> None:
     """Beyond the outermost bin centres (straight up, the sun's own azimuth, the slab's top)
-    a lookup holds the edge value, as a clamped texture does."""
+    a lookup holds the edge value, as a clamped texture does, whatever the pick."""
     import drjit as dr
     import mitsuba as mi
 
     tables = _linear_tables()
     texture = TableTexture(tables, LEVELS)
     up = mi.Vector3f(float(np.cos(0.3)) * 1e-4, float(np.sin(0.3)) * 1e-4, 1.0)  # at the sun's
-    sun = (dr.opaque(mi.Float, float(f(0.3))) for f in (np.cos, np.sin))
-    value = texture.toward(up, *sun)(1, mi.Float(1.0))
-    np.testing.assert_allclose(np.array(value).ravel(), tables[-1, -1, 0, 3:6], rtol=1e-5)
+    for u in (0.0, 0.3, 0.7, 0.99999):
+        sun = (dr.opaque(mi.Float, float(f(0.3))) for f in (np.cos, np.sin))
+        value = texture.toward(up, *sun, mi.Float(u))(1, mi.Float(1.0))
+        np.testing.assert_allclose(np.array(value).ravel(), tables[-1, -1, 0, 3:6], rtol=1e-5)
 
 
 @pytest.mark.parametrize("offset", [1, 2, 3])

@@ -64,3 +64,62 @@ def lobe_pdf(axis: Any, kappa: Any, d: Any) -> Any:
     import mitsuba as mi
 
     return mi.warp.square_to_von_mises_fisher_pdf(mi.Frame3f(axis).to_local(d), kappa)
+
+
+class GlintLobe:
+    """The glint lobe of one sun and sea as a ``physical`` integrator uses it: which surfaces
+    draw from it, the density of their continuation mixture, and the draw itself. Every
+    parameter is an opaque drjit value: another sun or sea reuses the compiled kernel."""
+
+    def __init__(self, sun_axis: np.ndarray, wind_speed: float, share: float = GLINT_SHARE):
+        """``sun_axis``: unit vector toward the sun; ``wind_speed`` (m/s): the sea's, which
+        sets the lobe's width; ``share``: of a facing surface's next directions."""
+        import drjit as dr
+        import mitsuba as mi
+
+        opaque = lambda x: dr.opaque(mi.Float, float(x))  # noqa: E731
+        self.axis = mi.Vector3f(*map(opaque, mirror_axis(sun_axis)))
+        self.share = opaque(lobe_share(sun_axis, share))
+        self.kappa = opaque(lobe_kappa(wind_speed))
+
+    def share_at(self, si: Any, bsdf: Any, active: Any) -> Any:
+        """The share of ``si``'s continuation directions drawn toward the glint: the lobe's
+        share on a surface that faces the sun's mirror image and has no delta lobe, 0
+        elsewhere (the sea itself: its normals point up, the glint down)."""
+        import drjit as dr
+        import mitsuba as mi
+
+        facing = dr.dot(si.n, self.axis) > 0.0
+        guided = active & facing & ~mi.has_flag(bsdf.flags(), mi.BSDFFlags.Delta)
+        return dr.select(guided, self.share, 0.0)
+
+    def continuation_pdf(self, share: Any, bsdf_pdf: Any, d: Any) -> Any:
+        """Solid-angle density of world direction ``d`` under a surface's continuation
+        mixture: the BSDF's density ``bsdf_pdf`` and the lobe's, ``share`` of it. The lights'
+        MIS weights are taken against this density, not the BSDF's alone, so that the weights
+        of a direction still sum to one (Veach 1997, §9.2)."""
+        return (1.0 - share) * bsdf_pdf + share * lobe_pdf(self.axis, self.kappa, d)
+
+    def continue_path(
+        self, sampler: Any, si: Any, bsdf: Any, ctx: Any, share: Any, active: Any
+    ) -> tuple[Any, Any, Any, Any]:
+        """The next direction of a path leaving ``si``: the BSDF sample ``bs``, the path's
+        weight ``f cos / pdf``, the direction (world) and its density, from a one-sample
+        mixture (Veach 1997, §9.2.4) of BSDF sampling and, with probability ``share``
+        (:meth:`share_at`), the lobe.
+
+        One 1-D and one 2-D number, as BSDF sampling alone takes: the 1-D one picks the
+        strategy and is rescaled for the BSDF, the 2-D one drives the one picked. Where
+        ``share`` is 0 (the sea) the path is the BSDF's, bit for bit."""
+        import drjit as dr
+
+        u, u2 = sampler.next_1d(active), sampler.next_2d(active)
+        guided = share > 0.0
+        pick = guided & (u < share)
+        u_bsdf = dr.select(guided, (u - share) / (1.0 - share), u)
+        bs, weight = bsdf.sample(ctx, si, dr.clip(u_bsdf, 0.0, 0.99999994), u2, active)
+        wo = dr.select(pick, lobe_sample(self.axis, self.kappa, u2), si.to_world(bs.wo))
+        value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(wo), guided)
+        pdf = self.continuation_pdf(share, bsdf_pdf, wo)
+        weight = dr.select(guided, value / dr.maximum(pdf, 1e-30), weight)
+        return bs, weight, wo, dr.select(guided, pdf, bs.pdf)

@@ -29,7 +29,7 @@ the next surface or out to the sky), for each level ``k`` of extinction ``σ_k``
   (docs/benchmarks.md, "Ground-truth noise"). The sun's aureole in the haze is sampled from
   each surface too (:meth:`sample_aureole`), against the BSDF sample's unshadowed sun. A hull
   facing the sea's sun glint draws most of its next directions toward the glint
-  (:meth:`continue_path`).
+  (:meth:`.GlintLobe.continue_path`).
 
 The surfaces a path meets, its BSDF samples and its shadow rays do not depend on the haze, so
 they are drawn once: the clean image (the path without haze) and every level come from the
@@ -51,6 +51,7 @@ import numpy as np
 
 from ..haze import HAZE_BOTTOM_M
 from . import glint_lobe, jit_haze
+from .jit_haze import TINY_OPTICAL_DEPTH
 from .sun_disk import disk_irradiance, sun_axis, sun_cone_cos
 from .table_texture import TableTexture
 
@@ -59,8 +60,6 @@ DEFAULT_BOUNCES = 3
 default scene at V = 1000 m, 6 instead of 3 changes the mean by < 0.05 %; 1 loses 0.15 %."""
 CAMERA_POINTS = 2
 """Stratified in-scattering points on the camera segment (one on later segments)."""
-TINY_OPTICAL_DEPTH = 1e-3
-"""Below this, ``1 − e^{−τ}`` is evaluated as ``τ (1 − τ/2)`` (float32 cancellation)."""
 
 
 def opaque_scalar(value: float) -> Any:
@@ -101,11 +100,14 @@ class _Path:
     att: list
     """Each level's transmittance from the camera to the path's current vertex."""
     prev_si: Any
+    """The last surface as an ``Interaction3f`` (its position is all the sky's density needs):
+    a whole ``SurfaceInteraction3f`` would carry some fifty more values through the loop."""
     prev_pdf: Any
     prev_delta: Any
 
     @classmethod
-    def start(cls, ray: Any, active: Any, n_levels: int) -> _Path:
+    def start(cls, ray: Any, active: Any, n_levels: int, grey: bool) -> _Path:
+        """A path at the camera; ``grey`` levels carry one transmittance, not an RGB one."""
         import drjit as dr
         import mitsuba as mi
 
@@ -116,8 +118,8 @@ class _Path:
             beta=mi.Color3f(1.0),
             clean=mi.Color3f(0.0),
             res=[mi.Color3f(0.0) for _ in range(n_levels)],
-            att=[mi.Color3f(1.0) for _ in range(n_levels)],
-            prev_si=dr.zeros(mi.SurfaceInteraction3f),
+            att=[mi.Float(1.0) if grey else mi.Color3f(1.0) for _ in range(n_levels)],
+            prev_si=dr.zeros(mi.Interaction3f),
             prev_pdf=mi.Float(1.0),
             prev_delta=mi.Bool(True),
         )
@@ -164,10 +166,7 @@ def make_integrator(
             self.sun_pdf = opaque_scalar(1.0 / (2.0 * np.pi * (1.0 - cos_max)))
             self.sun_irradiance = mi.Color3f(*(opaque_scalar(c) for c in disk_irradiance(sun)))
             # Where the sea's sun glint lies seen from a hull (glint_lobe module).
-            axis = sun_axis(sun)
-            self.glint_axis = mi.Vector3f(*map(opaque_scalar, glint_lobe.mirror_axis(axis)))
-            self.glint_share = opaque_scalar(glint_lobe.lobe_share(axis, glint_share))
-            self.glint_kappa = opaque_scalar(glint_lobe.lobe_kappa(wind_speed))
+            self.glint = glint_lobe.GlintLobe(sun_axis(sun), wind_speed, glint_share)
             self.top, self.bottom = top_m, HAZE_BOTTOM_M
             self.set_levels(
                 np.full((n_levels, 3), 1e-3),
@@ -197,6 +196,14 @@ def make_integrator(
                 raise ValueError(f"this integrator renders {self.n_levels} levels")
             opaque = lambda x: dr.opaque(mi.Float, float(x))  # noqa: E731
             self.sigma = [mi.Color3f(*(opaque(c) for c in row)) for row in sigma]
+            # Green's extinction (distances follow it) and, per level, the extinction the
+            # transmittances use: green's own for grey levels (one exponential, not three).
+            # Reciprocals are parameters too: a level's formulas then divide by nothing.
+            self.sg = [row.y for row in self.sigma]
+            self.inv_sg = [opaque(1.0 / row[1]) for row in sigma]
+            rgb_inv = [mi.Color3f(*(opaque(1.0 / c) for c in row)) for row in sigma]
+            self.ext = self.sg if self.grey else self.sigma
+            self.inv_ext = self.inv_sg if self.grey else rgb_inv
             # Every input is an opaque kernel parameter, so another scene or level reuses the
             # compiled kernel; per-level arrays are padded (jit_haze.padded_floats).
             self.sigma_g = jit_haze.padded_floats(sigma[:, 1])
@@ -238,10 +245,10 @@ def make_integrator(
             return enter, dr.maximum(leave - enter, 0.0)
 
         def transmittance(self, k: int, length: Any) -> Any:
-            """Level ``k``'s RGB transmittance over ``length`` metres."""
-            if self.grey:
-                return mi.Color3f(dr.exp(-self.sigma[k].y * length))
-            return dr.exp(-self.sigma[k] * length)
+            """Level ``k``'s transmittance over ``length`` metres: a Float for grey levels, RGB
+            otherwise. Written as ``exp(−(σ ℓ))``, as :func:`_one_minus_exp` is, so that the
+            two share one exponential."""
+            return dr.exp(-(self.ext[k] * length))
 
         def mixture_distance(self, u: Any, length: Any) -> tuple[Any, Any]:
             """A distance in ``[0, length]`` from the levels' mixture for uniform ``u``, and the
@@ -258,37 +265,52 @@ def make_integrator(
             s = dr.minimum(s, length)
             pdf = mi.Float(0.0)
             for k in range(self.n_levels):
-                sg = self.sigma[k].y
-                norm = _one_minus_exp(sg * length)
-                pdf += self.mix_weight[k] * sg * dr.exp(-sg * s) / dr.maximum(norm, 1e-30)
+                norm = _one_minus_exp(self.sg[k] * length)
+                density = self.sg[k] * dr.exp(-(self.sg[k] * s)) / dr.maximum(norm, 1e-30)
+                pdf += self.mix_weight[k] * density
             return s, pdf
 
-        def sun_source(self, sampler, active, travel):
-            """One direction uniform in the sun's disk, shared by every level, whether the sun
-            lights the haze from it, and its single-scattering source toward ``-travel`` per
-            unit extinction: the disk's irradiance × phase × albedo (sun_disk module)."""
-            d = self.sun_cone_direction(sampler.next_2d(active))
+        def sun_source(self, d, travel, active):
+            """Whether the sun lights the haze from disk direction ``d``, and its
+            single-scattering source toward ``-travel`` per unit extinction: the disk's
+            irradiance × phase × albedo (sun_disk module)."""
             lit = active & (d.z > 0.0)
             phase = jit_haze.hg_phase(dr.dot(d, travel), self.g)
-            return d, lit, dr.select(lit, self.sun_irradiance * phase * self.albedo, 0.0)
+            return lit, dr.select(lit, self.sun_irradiance * phase * self.albedo, 0.0)
 
-        def sun_unshadowed(self, k, source, ray, enter, length, mu_sun):
-            """Level ``k``'s unshadowed sun single scattering over the segment (closed form)."""
-            sigma = self.sigma[k] if not self.grey else self.sigma[k].y
-            z_entry = ray.o.z + enter * ray.d.z
-            return source * sigma * self.sun_integral(sigma, z_entry, ray.d.z, mu_sun, length)
+        def sun_scattered(self, k, near_k, depth, climb, length):
+            """Level ``k``'s :func:`jit_haze.sun_scattered_fraction` over ``length`` metres of
+            a segment entering the slab ``depth`` metres below its top along the sun, whose
+            optical depth toward the sun grows by ``climb`` (``1 − d_z / μ_sun``) per metre;
+            ``near_k``: the level's transmittance over that depth, if already known (a Python
+            ``None`` computes it)."""
+            e_start = self.ext[k] * depth
+            near = dr.exp(-e_start) if near_k is None else near_k
+            # 1 / climb is shared by every level: one division, not one per level.
+            return jit_haze.sun_scattered_fraction(
+                self.ext[k], near, e_start, climb, 1.0 / climb, length
+            )
+
+        def sun_scattered_at(self, k, depth, climb, s):
+            """The integrand of :meth:`sun_scattered` at distance ``s`` (1/m): level ``k``'s
+            ``σ e^{−σ (depth + climb s)}``, the light scattered there per unit of source."""
+            return self.ext[k] * self.transmittance(k, depth + climb * s)
 
         def aureole_pdf(self, d):
             """Solid-angle density of :meth:`sample_aureole`'s directions."""
             return jit_haze.hg_phase(dr.dot(self.sun_axis, d), self.g)
 
-        def sample_aureole(self, scene, sampler, si, bsdf, ctx, share, beta, att, res, active):
+        def sample_aureole(self, scene, sampler, si, bsdf, ctx, share, beta, p, active, sun):
             """The sun's single scattering in the haze as a light seen from a surface: one
             direction drawn from the phase function around the sun, weighted against BSDF
             sampling by the power heuristic. The aureole is broad and bright (the HG peak is
             125× its side at g = 0.75), and a glossy sea's BSDF samples found it rarely: it was
             most of a level's own noise near the camera (docs/physics.md, "The aureole").
-            ``share``: the surface's glint share (:meth:`glint_share_at`)."""
+            ``share``: the surface's glint share (:meth:`.GlintLobe.share_at`); ``sun``: the sun's
+            emitter sample at the surface (direction, slab depth toward it, each level's
+            transmittance over that depth), whose direction lights the haze here too, so that
+            the levels' transmittances toward the sun are computed once."""
+            sun_d, sun_depth, sun_att = sun
             cos_t = jit_haze.hg_sample_cos(sampler.next_1d(active), self.g)
             phi = 2.0 * dr.pi * sampler.next_1d(active)
             axis = (self.sun_axis.x, self.sun_axis.y, self.sun_axis.z)
@@ -297,15 +319,24 @@ def make_integrator(
             value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(d), active)
             active = active & (pdf > 0.0) & dr.any(value != 0.0)
             ray = si.spawn_ray(d)
-            hit = scene.ray_intersect_preliminary(ray, active)
-            enter, length = self.slab_length(ray.o, d, dr.select(hit.is_valid(), hit.t, dr.inf))
-            active &= length > 0.0
-            sun_d, lit, source = self.sun_source(sampler, active, d)
-            mis = _mis(pdf, self.continuation_pdf(share, bsdf_pdf, d))
-            weight = beta * value * mis / dr.maximum(pdf, 1e-30)
+            enter, length = self.slab_length(ray.o, d)
+            lit, source = self.sun_source(sun_d, d, active & (length > 0.0))
+            # A surface in the way (rarely: 2 % of the default scene's rays) hides what lies
+            # behind it: tested at one distance from the levels' mixture, whose shadow ray
+            # costs a third of finding the nearest hit (docs/physics.md, "The aureole").
+            s, s_pdf = self.mixture_distance(sampler.next_1d(active), length)
+            ray.maxt = enter + s
+            hidden = lit & scene.ray_test(ray, lit)
+            mis = _mis(pdf, self.glint.continuation_pdf(share, bsdf_pdf, d))
+            weight = beta * value * source * mis / dr.maximum(pdf, 1e-30)
+            climb = 1.0 - d.z / dr.maximum(sun_d.z, 1e-6)
             for k in range(self.n_levels):
-                sun = self.sun_unshadowed(k, source, ray, enter, length, sun_d.z)
-                res[k] += dr.select(lit, att[k] * weight * sun, 0.0)
+                # The segment enters the slab where the sun's sample left from (or at the
+                # bottom, from below it): the depth toward the sun there is the sample's.
+                frac = self.sun_scattered(k, sun_att[k], sun_depth, climb, length)
+                beyond = self.sun_scattered_at(k, sun_depth, climb, s)
+                frac -= dr.select(hidden, beyond / dr.maximum(s_pdf, 1e-30), 0.0)
+                p.res[k] += dr.select(lit, p.att[k] * weight * frac, 0.0)
 
         def inscatter(self, scene, sampler, ray, enter, length, weight, att, res, active, sun_mis):
             """Add every level's in-scattering along ``ray`` over ``[enter, enter + length]``
@@ -314,55 +345,45 @@ def make_integrator(
             :meth:`sample_aureole` at the surface the segment left). See the module
             docstring."""
             beta = mi.Color3f(1.0) if weight is None else weight
-            sun_d, lit, sun = self.sun_source(sampler, active, ray.d)
-            mu_sun = sun_d.z
+            sun_d = self.sun_cone_direction(sampler.next_2d(active))
+            lit, sun = self.sun_source(sun_d, ray.d, active)
+            mu_sun = dr.maximum(sun_d.z, 1e-6)
             z_entry = ray.o.z + enter * ray.d.z
-            tables = self.table.toward(-ray.d, self.sun_cos_az, self.sun_sin_az)
+            depth, climb = dr.maximum(self.top - z_entry, 0.0) / mu_sun, 1.0 - ray.d.z / mu_sun
+            pick = sampler.next_1d(active)
+            tables = self.table.toward(-ray.d, self.sun_cos_az, self.sun_sin_az, pick)
             # Stratified, and the same for every level (common random numbers).
             n_points = self.camera_points if weight is None else 1
             us = [(i + sampler.next_1d(active)) / n_points for i in range(n_points)]
             for k in range(self.n_levels):
                 # Unshadowed sun: transmittance to the point and on to the sun are both
                 # exponential in s, so their product integrates in closed form.
-                sun_k = self.sun_unshadowed(k, sun, ray, enter, length, mu_sun) * sun_mis
+                frac = self.sun_scattered(k, None, depth, climb, length)
                 # The diffuse field: distances drawn from the level's own transmittance.
-                sg = self.sigma[k].y
+                sg, inv_sg = self.sg[k], self.inv_sg[k]
                 mass = _one_minus_exp(sg * length)
                 diffuse = mi.Color3f(0.0)
                 for u in us:
-                    s = dr.minimum(-dr.log(dr.maximum(1.0 - u * mass, 1e-30)) / sg, length)
-                    value = tables(k, (z_entry + s * ray.d.z) / self.top)
+                    s = dr.minimum(-dr.log(dr.maximum(1.0 - u * mass, 1e-30)) * inv_sg, length)
+                    value = tables(k, (z_entry + s * ray.d.z) * (1.0 / self.top))
                     if not self.grey:  # distances follow green; reweight R and B
                         value = value * dr.exp(-(self.sigma[k] - sg) * s)
                     diffuse += value
-                source = sun_k + (mass / (sg * n_points)) * diffuse
+                source = sun * frac * sun_mis + (mass * inv_sg * (1.0 / n_points)) * diffuse
                 res[k] += dr.select(active, att[k] * beta * source, 0.0)
             # The shadow correction: one shared point and shadow ray.
             s, pdf = self.mixture_distance(sampler.next_1d(active), length)
             x = ray(enter + s)
             shadow = mi.Ray3f(x, sun_d, ray.time, ray.wavelengths)
             shaded = lit & scene.ray_test(shadow, lit)
-            sun_length = dr.maximum(self.top - x.z, 0.0) / dr.maximum(mu_sun, 1e-6)
             scale = beta * sun / dr.maximum(pdf, 1e-30)
             for k in range(self.n_levels):
-                lost = self.sigma[k] * self.transmittance(k, s + sun_length) * scale
+                lost = self.sun_scattered_at(k, depth, climb, s) * scale
                 res[k] -= dr.select(shaded, att[k] * lost, 0.0)
-
-        def sun_integral(self, sigma, z_entry, d_z, mu_sun, length):
-            """``∫₀^ℓ e^{−σ s} e^{−σ (top − z(s))/μ_sun} ds`` along a segment entering the slab
-            at height ``z_entry`` with vertical cosine ``d_z`` (``σ`` grey or RGB)."""
-            mu = dr.maximum(mu_sun, 1e-6)
-            e_start = sigma * dr.maximum(self.top - z_entry, 0.0) / mu
-            rate = sigma * (1.0 - d_z / mu)  # dE/ds; negative when climbing faster than the sun
-            x = rate * length
-            near = e_start * 0.0 + dr.exp(-e_start)
-            far = dr.exp(-dr.maximum(e_start + x, 0.0))  # E at the end is >= 0: never overflows
-            series = near * length * (1.0 - 0.5 * x)
-            return dr.select(dr.abs(x) < TINY_OPTICAL_DEPTH, series, (near - far) / rate)
 
         # -- the path ---------------------------------------------------------------------
         def sample(self, scene, sampler, ray, medium=None, active=True):
-            path = _Path.start(mi.Ray3f(ray), mi.Bool(active), self.n_levels)
+            path = _Path.start(mi.Ray3f(ray), mi.Bool(active), self.n_levels, self.grey)
             # The camera segment is unrolled (it takes CAMERA_POINTS in-scattering points);
             # later ones run in a loop that a packet of lanes leaves once all its paths have
             # ended: most end at the sky after one or two segments, and an unrolled kernel
@@ -423,72 +444,39 @@ def make_integrator(
             bsdf = si.bsdf(p.ray)
             active = p.active
             smooth = active & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-            share = self.glint_share_at(si, bsdf, active)
+            share = self.glint.share_at(si, bsdf, active)
+            sun = None
             for sample_light in (self.sample_sun, self.sky.sample_direction):
                 ds_e, em_w = sample_light(si, sampler.next_2d(smooth), smooth)
                 drawn = smooth & (ds_e.pdf > 0)
                 drawn &= ~scene.ray_test(si.spawn_ray(ds_e.d), drawn)
                 value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(ds_e.d), drawn)
-                mis_e = _mis(ds_e.pdf, self.continuation_pdf(share, bsdf_pdf, ds_e.d))
+                mis_e = _mis(ds_e.pdf, self.glint.continuation_pdf(share, bsdf_pdf, ds_e.d))
                 direct = dr.select(drawn, p.beta * value * em_w * mis_e, 0.0)
-                # Where nothing was drawn the direction may be NaN (the sky's sampler at
-                # the ends of its erfinv): its transmittance would make 0 · NaN = NaN.
                 _, e_length = self.slab_length(si.p, ds_e.d)
-                e_length = dr.select(drawn, e_length, 0.0)
+                if sun is not None:
+                    # Where nothing was drawn the sky's direction may be NaN (its sampler at
+                    # the ends of its erfinv): its transmittance would make 0 · NaN = NaN.
+                    e_length = dr.select(drawn, e_length, 0.0)
+                toward = [self.transmittance(k, e_length) for k in range(self.n_levels)]
+                if sun is None:  # the sun's disk sample, drawn or shadowed, for the aureole
+                    sun = (ds_e.d, e_length, toward)
                 p.clean += direct
                 for k in range(self.n_levels):
-                    lit = p.att[k] * self.transmittance(k, e_length) * direct
-                    p.res[k] += dr.select(drawn, lit, 0.0)
+                    p.res[k] += dr.select(drawn, p.att[k] * toward[k] * direct, 0.0)
 
-            self.sample_aureole(scene, sampler, si, bsdf, ctx, share, p.beta, p.att, p.res, smooth)
+            self.sample_aureole(scene, sampler, si, bsdf, ctx, share, p.beta, p, smooth, sun)
 
-            bs, bsdf_weight, wo, pdf = self.continue_path(sampler, si, bsdf, ctx, share, active)
+            turn = self.glint.continue_path(sampler, si, bsdf, ctx, share, active)
+            bs, bsdf_weight, wo, pdf = turn
             p.beta = dr.select(active, p.beta * bsdf_weight, p.beta)
             active &= dr.any(p.beta != 0.0)
-            p.prev_si = dr.select(active, si, p.prev_si)
+            p.prev_si = dr.select(active, mi.Interaction3f(si), p.prev_si)
             p.prev_pdf = dr.select(active, pdf, p.prev_pdf)
             delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
             p.prev_delta = dr.select(active, delta, p.prev_delta)
             p.ray = dr.select(active, si.spawn_ray(wo), p.ray)
             p.active = active
-
-        def glint_share_at(self, si, bsdf, active):
-            """The share of ``si``'s continuation directions drawn toward the sea's sun glint
-            (:meth:`continue_path`): the integrator's glint share on a surface that faces the
-            sun's mirror image in the sea and has no delta lobe, 0 elsewhere (the sea itself:
-            its normals point up, the glint down)."""
-            facing = dr.dot(si.n, self.glint_axis) > 0.0
-            guided = active & facing & ~mi.has_flag(bsdf.flags(), mi.BSDFFlags.Delta)
-            return dr.select(guided, self.glint_share, 0.0)
-
-        def continuation_pdf(self, share, bsdf_pdf, d):
-            """Solid-angle density of direction ``d`` (world) under the surface's continuation
-            mixture: the BSDF's density ``bsdf_pdf`` and the glint lobe's, ``share`` of it. The
-            lights' MIS weights are taken against this density, not the BSDF's alone, so that
-            the weights of a direction still sum to one (Veach 1997, §9.2)."""
-            lobe = glint_lobe.lobe_pdf(self.glint_axis, self.glint_kappa, d)
-            return (1.0 - share) * bsdf_pdf + share * lobe
-
-        def continue_path(self, sampler, si, bsdf, ctx, share, active):
-            """The next direction of a path leaving ``si``: the BSDF sample ``bs``, the path's
-            weight ``f cos / pdf``, the direction (world) and its density, from a one-sample
-            mixture (Veach 1997, §9.2.4) of BSDF sampling and, with probability ``share``
-            (:meth:`glint_share_at`), the sun glint's lobe (:mod:`~seahaze.render.glint_lobe`).
-
-            One 1-D and one 2-D number, as BSDF sampling alone takes: the 1-D one picks the
-            strategy and is rescaled for the BSDF, the 2-D one drives the one picked. Where
-            ``share`` is 0 (the sea) the path is the BSDF's, bit for bit."""
-            u, u2 = sampler.next_1d(active), sampler.next_2d(active)
-            guided = share > 0.0
-            pick = guided & (u < share)
-            u_bsdf = dr.select(guided, (u - share) / (1.0 - share), u)
-            bs, weight = bsdf.sample(ctx, si, dr.clip(u_bsdf, 0.0, 0.99999994), u2, active)
-            lobe = glint_lobe.lobe_sample(self.glint_axis, self.glint_kappa, u2)
-            wo = dr.select(pick, lobe, si.to_world(bs.wo))
-            value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(wo), guided)
-            pdf = self.continuation_pdf(share, bsdf_pdf, wo)
-            weight = dr.select(guided, value / dr.maximum(pdf, 1e-30), weight)
-            return bs, weight, wo, dr.select(guided, pdf, bs.pdf)
 
         def aov_names(self):
             return [f"{k}.{c}" for k in range(self.n_levels) for c in "RGB"]

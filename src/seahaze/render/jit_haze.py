@@ -14,6 +14,8 @@ import numpy as np
 
 from ..haze import FOUR_PI
 
+TINY_OPTICAL_DEPTH = 1e-3
+"""Below this, ``1 − e^{−τ}`` is evaluated as ``τ (1 − τ/2)`` (float32 cancellation)."""
 FLAT_DZ = 1e-7
 """A ray with ``|d_z|`` below this is horizontal for the slab (float32 directions)."""
 
@@ -121,3 +123,23 @@ def padded_floats(values: np.ndarray) -> Any:
     index. drjit treats a one-element array as a scalar, a different kernel from the one for
     several levels; the padding keeps one kernel for every level count."""
     return owned_floats(np.append(np.asarray(values, np.float32), np.float32(0.0)))
+
+
+def sun_scattered_fraction(
+    sigma: Any, near: Any, e_start: Any, climb: Any, inv_climb: Any, length: Any
+) -> Any:
+    """``σ ∫₀^ℓ e^{−(τ₀ + σ c s)} ds``: per unit of the sun's source, the light scattered
+    toward a segment's start by its first ``length`` metres, each point's light attenuated on
+    its way from the sun and on to the start. At distance ``s`` the two paths have optical
+    depth ``τ₀ + σ c s``: ``τ₀ = e_start`` toward the sun from the start (``near`` =
+    ``e^{−τ₀}``), plus ``σ s`` back to the start, less ``σ s d_z / μ_sun`` toward the sun
+    (``c = climb = 1 − d_z / μ_sun``, negative where the segment climbs more steeply than the
+    sun). In closed form ``(near − e^{−(τ₀ + σ c ℓ)}) / c``, by its series where ``σ c ℓ``
+    is too small for float32. ``inv_climb`` = ``1 / c``, computed once for every level;
+    ``sigma`` may be RGB."""
+    import drjit as dr
+
+    x = sigma * climb * length
+    far = dr.exp(-dr.maximum(e_start + x, 0.0))  # τ at the end is >= 0: never overflows
+    series = sigma * near * length * (1.0 - 0.5 * x)
+    return dr.select(dr.abs(x) < TINY_OPTICAL_DEPTH, series, (near - far) * inv_climb)

@@ -70,27 +70,34 @@ class TableTexture:
         self.grid = fine.shape[0:3]  # (n_mu, n_phi, n_z fine)
         self.values = jit_haze.owned_floats(fine)
 
-    def toward(self, travel: Any, cos_sun: Any, sin_sun: Any) -> Any:
+    def toward(self, travel: Any, cos_sun: Any, sin_sun: Any, u: Any) -> Any:
         """A function ``(level, z / top) → RGB``: the diffuse in-scattering toward unit travel
         direction ``travel`` at a relative height in the slab (see the module docstring);
-        ``cos_sun``, ``sin_sun``: of the sun's azimuth."""
+        ``cos_sun``, ``sin_sun``: of the sun's azimuth; ``u``: a uniform number in [0, 1)
+        that picks the texel (stochastic bilinear filtering, module docstring)."""
         import drjit as dr
         import mitsuba as mi
 
         n_mu, n_phi, n_z = self.grid
         phi = jit_haze.folded_azimuth(travel.x, travel.y, cos_sun, sin_sun)
-        corners = [
-            (wm * wp, (im * n_phi + ip) * n_z)
-            for im, wm in _linear_taps((travel.z + 1.0) * 0.5, n_mu)
-            for ip, wp in _linear_taps(phi / dr.pi, n_phi)
-        ]
+        i_mu, u = _pick_tap(_linear_taps((travel.z + 1.0) * 0.5, n_mu), u)
+        i_phi, _ = _pick_tap(_linear_taps(phi / dr.pi, n_phi), u)
+        offset = (i_mu * n_phi + i_phi) * n_z
 
         def lookup(level: int, height: Any) -> Any:
             iz = mi.UInt32(dr.clip(dr.floor(height * n_z), 0, n_z - 1))
-            value = mi.Color3f(0.0)
-            for weight, offset in corners:
-                rgba = dr.gather(mi.Vector4f, self.values, (offset + iz) * self.n_levels + level)
-                value += weight * mi.Color3f(rgba.x, rgba.y, rgba.z)
-            return value
+            rgba = dr.gather(mi.Vector4f, self.values, (offset + iz) * self.n_levels + level)
+            return mi.Color3f(rgba.x, rgba.y, rgba.z)
 
         return lookup
+
+
+def _pick_tap(taps: list[tuple[Any, Any]], u: Any) -> tuple[Any, Any]:
+    """One of linear interpolation's two texels, each with probability its weight, chosen by
+    uniform ``u``, and ``u`` rescaled to [0, 1) within the choice (for the next axis)."""
+    import drjit as dr
+
+    (low, w_low), (high, _) = taps
+    first = u < w_low
+    rest = dr.select(first, u / w_low, (u - w_low) / (1.0 - w_low))
+    return dr.select(first, low, high), dr.clip(rest, 0.0, 0.99999994)
