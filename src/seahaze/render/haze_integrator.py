@@ -198,12 +198,10 @@ def make_integrator(
             self.sigma = [mi.Color3f(*(opaque(c) for c in row)) for row in sigma]
             # Green's extinction (distances follow it) and, per level, the extinction the
             # transmittances use: green's own for grey levels (one exponential, not three).
-            # Reciprocals are parameters too: a level's formulas then divide by nothing.
+            # Green's reciprocal is a parameter too: the diffuse points divide by nothing.
             self.sg = [row.y for row in self.sigma]
             self.inv_sg = [opaque(1.0 / row[1]) for row in sigma]
-            rgb_inv = [mi.Color3f(*(opaque(1.0 / c) for c in row)) for row in sigma]
             self.ext = self.sg if self.grey else self.sigma
-            self.inv_ext = self.inv_sg if self.grey else rgb_inv
             # Every input is an opaque kernel parameter, so another scene or level reuses the
             # compiled kernel; per-level arrays are padded (jit_haze.padded_floats).
             self.sigma_g = jit_haze.padded_floats(sigma[:, 1])
@@ -286,7 +284,7 @@ def make_integrator(
             ``None`` computes it)."""
             e_start = self.ext[k] * depth
             near = dr.exp(-e_start) if near_k is None else near_k
-            # 1 / climb is shared by every level: one division, not one per level.
+            # The same 1 / climb for every level: drjit's value numbering keeps one division.
             return jit_haze.sun_scattered_fraction(
                 self.ext[k], near, e_start, climb, 1.0 / climb, length
             )
@@ -300,12 +298,13 @@ def make_integrator(
             """Solid-angle density of :meth:`sample_aureole`'s directions."""
             return jit_haze.hg_phase(dr.dot(self.sun_axis, d), self.g)
 
-        def sample_aureole(self, scene, sampler, si, bsdf, ctx, share, beta, p, active, sun):
+        def sample_aureole(self, scene, sampler, si, bsdf, ctx, share, p, active, sun):
             """The sun's single scattering in the haze as a light seen from a surface: one
             direction drawn from the phase function around the sun, weighted against BSDF
             sampling by the power heuristic. The aureole is broad and bright (the HG peak is
             125× its side at g = 0.75), and a glossy sea's BSDF samples found it rarely: it was
             most of a level's own noise near the camera (docs/physics.md, "The aureole").
+            ``p``: the path (its throughput, transmittances and radiances, updated in place);
             ``share``: the surface's glint share (:meth:`.GlintLobe.share_at`); ``sun``: the sun's
             emitter sample at the surface (direction, slab depth toward it, each level's
             transmittance over that depth), whose direction lights the haze here too, so that
@@ -328,7 +327,7 @@ def make_integrator(
             ray.maxt = enter + s
             hidden = lit & scene.ray_test(ray, lit)
             mis = _mis(pdf, self.glint.continuation_pdf(share, bsdf_pdf, d))
-            weight = beta * value * source * mis / dr.maximum(pdf, 1e-30)
+            weight = p.beta * value * source * mis / dr.maximum(pdf, 1e-30)
             climb = 1.0 - d.z / dr.maximum(sun_d.z, 1e-6)
             for k in range(self.n_levels):
                 # The segment enters the slab where the sun's sample left from (or at the
@@ -465,10 +464,10 @@ def make_integrator(
                 for k in range(self.n_levels):
                     p.res[k] += dr.select(drawn, p.att[k] * toward[k] * direct, 0.0)
 
-            self.sample_aureole(scene, sampler, si, bsdf, ctx, share, p.beta, p, smooth, sun)
+            self.sample_aureole(scene, sampler, si, bsdf, ctx, share, p, smooth, sun)
 
-            turn = self.glint.continue_path(sampler, si, bsdf, ctx, share, active)
-            bs, bsdf_weight, wo, pdf = turn
+            glint = self.glint
+            bs, bsdf_weight, wo, pdf = glint.continue_path(sampler, si, bsdf, ctx, share, active)
             p.beta = dr.select(active, p.beta * bsdf_weight, p.beta)
             active &= dr.any(p.beta != 0.0)
             p.prev_si = dr.select(active, mi.Interaction3f(si), p.prev_si)
