@@ -17,7 +17,7 @@ Errors are measured against the converged ``reference`` images in
 Results: the "modes" section of docs/benchmarks.md, ``docs/images/bench_speed_error.png``
 (log-log) and ``docs/images/bench_strip.png`` (reference, asm and physical side by side).
 
-Usage: python scripts/bench_modes.py [--quick]
+Usage: python scripts/bench_modes.py [--quick] [--configs MODE:SPP+SPP,...] [--reuse]
 """
 
 from __future__ import annotations
@@ -137,25 +137,37 @@ def load_references() -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dic
     return rgb, se, meta
 
 
-def errors(y: np.ndarray, y_ref: np.ndarray, regions: dict[str, np.ndarray]) -> dict[str, float]:
-    """Relative mean absolute error per region and the relative bias over the whole image."""
-    out = {
-        name: float(np.abs(y[m] - y_ref[m]).mean() / y_ref[m].mean()) for name, m in regions.items()
-    }
-    out["bias"] = float(y.mean() / y_ref.mean() - 1.0)
+def errors(
+    y: np.ndarray, y_ref: np.ndarray, se_ref: np.ndarray, regions: dict[str, np.ndarray]
+) -> dict[str, float]:
+    """Per region: relative mean absolute error (``name``), relative bias of the region's mean
+    (``bias_name``) and the standard error of the reference's region mean relative to it
+    (``bias_se_name``, from its per-pixel standard errors ``se_ref``, independent per pixel);
+    ``bias`` is the whole image's."""
+    out: dict[str, float] = {}
+    for name, m in regions.items():
+        mean_ref = y_ref[m].mean()
+        out[name] = float(np.abs(y[m] - y_ref[m]).mean() / mean_ref)
+        out[f"bias_{name}"] = float(y[m].mean() / mean_ref - 1.0)
+        out[f"bias_se_{name}"] = float(np.sqrt(np.sum(se_ref[m] ** 2)) / m.sum() / mean_ref)
+    out["bias"] = out["bias_all"]
     return out
 
 
-def run_configs(configs: dict[str, tuple[int, ...]], work: Path) -> list[dict]:
-    """Run every (mode, spp) in its own process; return their results."""
+def run_configs(configs: dict[str, tuple[int, ...]], work: Path, reuse: bool) -> list[dict]:
+    """Run every (mode, spp) in its own process (``reuse``: take a result already in ``work``
+    instead, to redo only the report); return their results."""
     rows = []
     for mode, spps in configs.items():
         for spp in spps:
             out = work / f"{mode}-{spp}.npz"
-            print(f"{mode} {spp} spp ...", flush=True)
-            subprocess.run(
-                [sys.executable, __file__, "--child", mode, str(spp), str(out)], check=True
-            )
+            if reuse and out.exists():
+                print(f"{mode} {spp} spp: reusing {out}", flush=True)
+            else:
+                print(f"{mode} {spp} spp ...", flush=True)
+                subprocess.run(
+                    [sys.executable, __file__, "--child", mode, str(spp), str(out)], check=True
+                )
             data = np.load(out)
             rows.append({"mode": mode, "spp": spp, **{k: data[k] for k in data.files}})
     return rows
@@ -175,7 +187,7 @@ def analyse(rows: list[dict]) -> list[dict]:
         for i, v in enumerate(LEVELS):
             key = f"v{int(v):04d}"
             y_ref = luminance(ref_rgb[key])
-            err = errors(luminance(row["images"][i]), y_ref, regions)
+            err = errors(luminance(row["images"][i]), y_ref, ref_se[key], regions)
             floor = float(np.sqrt(2 / np.pi) * ref_se[key].mean() / y_ref.mean())
             table.append(
                 {
@@ -309,6 +321,22 @@ def write_doc(table: list[dict], meta: dict) -> None:
         )
     lines += [
         "",
+        "Bias of each region's mean against the reference's (± the reference's own standard "
+        "error of that mean, its pixels' noise taken as independent):",
+        "",
+        "| mode | spp | V (m) | sea | sky | vessel |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in table:
+        lines.append(
+            f"| {r['mode']} | {r['spp']} | {r['level']:g} | "
+            + " | ".join(
+                _percent_pm(r[f"bias_{k}"], r[f"bias_se_{k}"]) for k in ("sea", "sky", "vessel")
+            )
+            + " |"
+        )
+    lines += [
+        "",
         "![speed versus error](images/bench_speed_error.png)",
         "",
         "![reference, asm and physical](images/bench_strip.png)",
@@ -338,6 +366,9 @@ def main() -> None:
     )
     parser.add_argument("--child", nargs=3, metavar=("MODE", "SPP", "OUT"), help=argparse.SUPPRESS)
     parser.add_argument("--work", type=Path, default=ROOT / "out" / "bench-modes")
+    parser.add_argument(
+        "--reuse", action="store_true", help="report from results already in --work, if present"
+    )
     args = parser.parse_args()
     if args.child:
         child(args.child[0], int(args.child[1]), Path(args.child[2]))
@@ -349,7 +380,7 @@ def main() -> None:
             mode: tuple(int(n) for n in spps.split("+"))
             for mode, spps in (item.split(":") for item in args.configs.split(","))
         }
-    rows = run_configs(configs, args.work)
+    rows = run_configs(configs, args.work, args.reuse)
     table = analyse(rows)
     (args.work / "results.json").write_text(json.dumps(table, indent=2))
     _, _, meta = load_references()
