@@ -263,3 +263,17 @@ def test_one_shadow_ray_takes_off_the_hidden_stretch(
         )
         estimate = float(np.mean(np.array(taken, np.float64)))
         np.testing.assert_allclose(estimate, np.array(exact)[0], rtol=5e-3)
+
+
+def test_table_photons_follow_the_pass_budget():
+    """One table photon per 32 camera samples, a power of two within the bounds: dataset-size
+    renders get the most photons (the tables' noise is level-wide), tests and CI the fewest."""
+    lo, hi = physical.MIN_TABLE_PHOTONS, physical.MAX_TABLE_PHOTONS
+    assert physical.table_photons(1280 * 720 * 42) == hi  # the default scene at full size
+    assert physical.table_photons(1280 * 720 * 32) == hi  # MSVD's size
+    assert physical.table_photons(64 * 36 * 4) == lo
+    assert physical.table_photons(0) == lo
+    assert physical.table_photons(32 << 18) == 1 << 18  # inside the bounds: samples / 32
+    counts = [physical.table_photons(n) for n in np.geomspace(1, 1e10, 200).astype(np.int64)]
+    assert all(lo <= c <= hi and c & (c - 1) == 0 for c in counts)
+    assert counts == sorted(counts)

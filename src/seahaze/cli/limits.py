@@ -16,7 +16,8 @@ The estimate is the cost model of ``scripts/measure_cost_model.py``, measured on
     wall time = Σ_scenes serial + render / cores    (setup and writes are serial)
 
 except in ``physical``, whose one pass gives the clean image and every level: its render part is
-``pixels · spp · (pass + (levels − 1) · level) + Σ_levels table(V)``.
+``pixels · spp · (pass + (levels − 1) · level) + photons / 2^17 · Σ_levels table(V)``, the tables
+timed at 2^17 photons and traced with ``render.physical.table_photons(pixels · spp)``.
 
 ``V``-dependent constants are interpolated in log V between 50, 300 and 4000 m (held beyond).
 On a GPU (``cuda_ad_rgb``) the estimate is an upper bound.
@@ -139,9 +140,14 @@ def scene_core_seconds(spec: SceneSpec) -> tuple[float, float]:
     if mode == "physical":
         # One pass gives the clean image and every level; each level adds a little to it
         # and its diffuse table.
+        from ..render.physical import MIN_TABLE_PHOTONS, table_photons
+
         further = max(len(levels) - 1, 0) * PHYSICAL_LEVEL_CORE_S
         parallel = pixels * spp * (PHYSICAL_PASS_CORE_S + further)
-        return serial, parallel + sum(_interpolated(PHYSICAL_TABLE_S, v) for v in levels)
+        # The tables were timed at the fewest photons; larger passes trace more.
+        photons = table_photons(pixels * spp) / MIN_TABLE_PHOTONS
+        tables = photons * sum(_interpolated(PHYSICAL_TABLE_S, v) for v in levels)
+        return serial, parallel + tables
     parallel = pixels * spp * CLEAN_CORE_S
     for v in levels:
         if mode == "reference":

@@ -27,8 +27,12 @@ from .passes import render_radiance
 from .photon_tracer import SeaReflectance
 from .scene import LoadedScene, stratified_spp, sunsky_dict
 
-TABLE_PHOTONS = 1 << 17
-"""Photons per level table (half from the sun, half from the sky): ~1 % noise per table bin."""
+MIN_TABLE_PHOTONS = 1 << 17
+"""Fewest photons per level table (half from the sun, half from the sky)."""
+MAX_TABLE_PHOTONS = 1 << 20
+"""Most photons per level table: ~4 s for eleven tables on this project's 2-vCPU machine."""
+SAMPLES_PER_PHOTON = 32
+"""Camera samples (pixels × spp) per table photon, before rounding and the bounds above."""
 MAX_LEVELS_PER_PASS = 12
 """Most levels one pass renders (its kernel's size grows with the count)."""
 FILM_BUDGET_BYTES = 2 << 30
@@ -40,6 +44,24 @@ def _mi():
     import mitsuba as mi
 
     return mi
+
+
+def table_photons(samples: int) -> int:
+    """Photons per level table for a pass of ``samples`` camera samples (pixels × spp): one
+    per :data:`SAMPLES_PER_PHOTON` samples, rounded to a power of two and held within
+    [:data:`MIN_TABLE_PHOTONS`, :data:`MAX_TABLE_PHOTONS`].
+
+    A table's noise does not average out over pixels: it moves a level's whole brightness. On
+    the benchmark scene the region means of a level varied between table seeds by 2.7 % (1σ,
+    sea at V = 300 m) with 2^17 photons and by 0.4 % with 2^20 (docs/benchmarks.md, "The
+    diffuse tables' noise"). A photon traced through eleven levels costs about nine camera
+    samples of an 11-level pass, so one photon per 32 samples keeps the tables near a quarter
+    of the pass at dataset size (2^20 photons at 1280×720, 42 spp) and leaves small renders
+    (tests, CI regeneration, 320×180) at the floor, where their pixels' own noise is larger.
+    """
+    wanted = max(samples, 1) / SAMPLES_PER_PHOTON
+    rounded = 1 << max(round(math.log2(wanted)), 0)
+    return min(max(rounded, MIN_TABLE_PHOTONS), MAX_TABLE_PHOTONS)
 
 
 def emitter_photons(
@@ -159,12 +181,13 @@ class PhysicalRenderer:
         loaded: LoadedScene,
         spec: SceneSpec,
         bounces: int = DEFAULT_BOUNCES,
-        photons: int = TABLE_PHOTONS,
+        photons: int | None = None,
         glint_share: float = GLINT_SHARE,
     ):
-        """``glint_share``: the share of a hull's next directions drawn toward the sea's sun
-        glint (:mod:`~seahaze.render.glint_lobe`; 0 for BSDF sampling alone, as benchmarks
-        and tests compare)."""
+        """``photons``: per level table, or None for :func:`table_photons` of each pass's
+        sample count. ``glint_share``: the share of a hull's next directions drawn toward the
+        sea's sun glint (:mod:`~seahaze.render.glint_lobe`; 0 for BSDF sampling alone, as
+        benchmarks and tests compare)."""
         mi = _mi()
         self.loaded = loaded
         # The sun and the sky as separate emitters: the sun's single scattering is computed
@@ -187,13 +210,15 @@ class PhysicalRenderer:
         albedo: float,
         g: float,
         seed: int,
+        photons: int = MIN_TABLE_PHOTONS,
         grid: TableGrid = DEFAULT_GRID,
     ) -> np.ndarray:
         """The diffuse-field tables of levels with extinction ``sigma`` (L, 3) in 1/m, as one
-        (n_z, n_mu, n_phi, 3L) array. Each distinct extinction is traced once (a grey level
-        needs one table, a per-channel one three), all from the same source photons."""
+        (n_z, n_mu, n_phi, 3L) array, from ``photons`` photons each (the renderer's own count
+        when it was given one). Each distinct extinction is traced once (a grey level needs
+        one table, a per-channel one three), all from the same source photons."""
         top = self.loaded.haze_top_m
-        half = self.photons // 2
+        half = (self.photons or photons) // 2
         sun = emitter_photons(self.sun, half, seed, top)
         sky = emitter_photons(self.sky, half, seed + 1, top)
         distinct = list(dict.fromkeys(float(c) for c in sigma.ravel()))
@@ -218,10 +243,11 @@ class PhysicalRenderer:
         sigma = np.stack([extinction_rgb(s) for s in sigmas]) if sigmas else np.zeros((0, 3))
         if np.any(sigma <= 0.0):
             raise ValueError("every hazy level needs a positive extinction")
-        start = time.perf_counter()
-        tables = self.tables(sigma, albedo, g, seed) if len(sigma) else None
-        table_seconds = time.perf_counter() - start
         cam = self.loaded.camera
+        start = time.perf_counter()
+        photons = table_photons(cam.width * cam.height * spp)
+        tables = self.tables(sigma, albedo, g, seed, photons) if len(sigma) else None
+        table_seconds = time.perf_counter() - start
         group = levels_per_pass(cam.width, cam.height, len(sigma))
         clean: np.ndarray | None = None
         levels: list[np.ndarray] = []
