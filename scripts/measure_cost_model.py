@@ -219,7 +219,8 @@ def main() -> None:
     )
     for v in LEVELS:
         lines.append(
-            f"| physical table, V = {v:g} m | {tables[v]:.2f} s | per level (its diffuse table) |"
+            f"| physical table, V = {v:g} m | {tables[v]:.2f} s | per level (its diffuse table "
+            "at 2^17 photons; scaled by the photons traced) |"
         )
     for v in LEVELS:
         lines.append(f"| reference, V = {v:g} m | {reference[v][0]:.3g} s | per pixel-sample |")
