@@ -1,0 +1,116 @@
+"""`physical` against Mitsuba `volpath` on the benchmark scene at any visibility, with the sun or
+the sky switched off and any phase asymmetry ``g``: which light the physical mode gets wrong.
+
+The benchmark scene (``scenes/benchmark.yaml``, 80×45) is rendered at visibility ``V`` by
+``volpath`` (``--batches`` independent batches of 1024 spp, seeds past those of the stored
+references) and by ``physical`` (2^20-photon tables, four sampler seeds at 256 spp), both with
+the scene's ``sun.scale`` and ``sky.scale`` replaced by ``--sun`` and ``--sky`` and ``haze.g`` by
+``--g`` (and the camera's heading by ``--heading``: 150° looks toward the sun); then both
+without haze. It prints, per region (sea, sky, all vessels, and each of the
+first three vessels), the relative difference of the region means, physical against volpath,
+± the volpath mean's standard error (from its batches).
+
+Usage: python scripts/compare_components.py V [--batches 8] [--g 0.75] [--sun 1] [--sky 1]
+       [--heading DEG]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENE = ROOT / "scenes" / "benchmark.yaml"
+LEVELS = (300.0, 1000.0, 4000.0)
+"""The benchmark's levels: the reference's haze box is sized for them (and ``V``)."""
+
+
+def volpath_luminance(session, sigma, albedo: float, g: float, batches: int, offset: int):
+    """Mean luminance and its standard error over ``batches`` volpath batches of 1024 spp."""
+    from seahaze.imaging import luminance
+    from seahaze.render import passes
+    from seahaze.seeds import RenderPass, render_seed
+
+    session.loaded.set_haze(sigma, albedo, g)
+    seed0 = session.loaded.spec.render.seed
+    runs = [
+        luminance(
+            passes.render_radiance(
+                session.loaded,
+                1024,
+                render_seed(seed0, RenderPass.CONVERGED_REFERENCE, 7, offset + b),
+            )
+        )
+        for b in range(batches)
+    ]
+    return np.mean(runs, 0), np.std(runs, 0, ddof=1) / np.sqrt(batches)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("visibility", type=float, help="V in metres")
+    parser.add_argument("--batches", type=int, default=8, help="volpath batches of 1024 spp")
+    parser.add_argument("--g", type=float, default=None, help="haze.g (default: the scene's)")
+    parser.add_argument("--sun", type=float, default=1.0, help="sun.scale")
+    parser.add_argument("--sky", type=float, default=1.0, help="sky.scale")
+    parser.add_argument(
+        "--heading", type=float, default=None, help="camera.heading_deg (default: the scene's)"
+    )
+    args = parser.parse_args()
+
+    from seahaze.imaging import luminance
+    from seahaze.render.engine import open_session
+    from seahaze.render.physical import MAX_TABLE_PHOTONS, PhysicalRenderer
+    from seahaze.sceneio import load_scene
+    from seahaze.spec import with_changes, with_overrides
+    from seahaze.visibility import channel_extinction
+
+    base, _ = load_scene(SCENE)
+    changes: dict = {"sun": {"scale": args.sun}, "sky": {"scale": args.sky}}
+    if args.g is not None:
+        changes["haze"] = {"g": args.g}
+    if args.heading is not None:
+        changes["camera"] = {"heading_deg": args.heading}
+    base = with_changes(base, changes)
+    haze = base.haze
+    v = args.visibility
+    sigma = channel_extinction(v, haze.threshold, haze.extinction_spectrum)
+    start = time.perf_counter()
+    levels = sorted({*LEVELS, v})
+    reference = open_session(with_overrides(base, mode="reference", levels=levels))
+    ref, ref_se = volpath_luminance(reference, sigma, haze.albedo, haze.g, args.batches, 200000)
+    clean_ref, _ = volpath_luminance(reference, 0.0, haze.albedo, haze.g, 4, 300000)
+
+    spec = with_overrides(base, mode="physical", levels=[v])
+    session = open_session(spec)
+    renderer = PhysicalRenderer(session.loaded, spec, photons=MAX_TABLE_PHOTONS)
+    runs = [renderer.render([sigma], haze.albedo, haze.g, 256, seed) for seed in range(1, 5)]
+    phys = np.mean([luminance(r.levels[0]) for r in runs], 0)
+    clean = np.mean([luminance(r.clean) for r in runs], 0)
+
+    pixels = session.pixels
+    sky = np.isinf(pixels.distance_m)
+    vessel = pixels.instance >= 0
+    regions = {"sea": ~sky & ~vessel, "sky": sky, "vessels": vessel}
+    regions |= {f"vessel {i}": pixels.instance == i for i in range(3)}
+    print(
+        f"V = {v:g} m, g = {haze.g}, sun × {args.sun}, sky × {args.sky}; "
+        f"{time.perf_counter() - start:.0f} s"
+    )
+    for name, m in regions.items():
+        if not m.any():
+            continue
+        diff = phys[m].mean() / ref[m].mean() - 1.0
+        se = np.sqrt(np.sum(ref_se[m] ** 2)) / m.sum() / ref[m].mean()
+        clean_diff = clean[m].mean() / clean_ref[m].mean() - 1.0
+        print(
+            f"  {name:9s} hazy {100 * diff:+6.2f} ± {100 * se:.2f} %   "
+            f"clean {100 * clean_diff:+6.2f} %"
+        )
+
+
+if __name__ == "__main__":
+    main()
