@@ -214,11 +214,11 @@ class PhysicalRenderer:
         grid: TableGrid = DEFAULT_GRID,
     ) -> np.ndarray:
         """The diffuse-field tables of levels with extinction ``sigma`` (L, 3) in 1/m, as one
-        (n_z, n_mu, n_phi, 3L) array, from ``photons`` photons each (the renderer's own count
-        when it was given one). Each distinct extinction is traced once (a grey level needs
-        one table, a per-channel one three), all from the same source photons."""
+        (n_z, n_mu, n_phi, 3L) array, from ``photons`` photons each. Each distinct extinction
+        is traced once (a grey level needs one table, a per-channel one three), all from the
+        same source photons."""
         top = self.loaded.haze_top_m
-        half = (self.photons or photons) // 2
+        half = photons // 2
         sun = emitter_photons(self.sun, half, seed, top)
         sky = emitter_photons(self.sky, half, seed + 1, top)
         distinct = list(dict.fromkeys(float(c) for c in sigma.ravel()))
@@ -245,7 +245,7 @@ class PhysicalRenderer:
             raise ValueError("every hazy level needs a positive extinction")
         cam = self.loaded.camera
         start = time.perf_counter()
-        photons = table_photons(cam.width * cam.height * spp)
+        photons = self.photons or table_photons(cam.width * cam.height * spp)
         tables = self.tables(sigma, albedo, g, seed, photons) if len(sigma) else None
         table_seconds = time.perf_counter() - start
         group = levels_per_pass(cam.width, cam.height, len(sigma))
