@@ -137,6 +137,19 @@ def load_references() -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dic
     return rgb, se, meta
 
 
+def region_masks(distance: np.ndarray, instance: np.ndarray) -> dict[str, np.ndarray]:
+    """Sea, sky and vessel pixels from the geometry pass's distance and instance buffers."""
+    sky = np.isinf(distance)
+    vessel = instance >= 0
+    return {"sea": ~sky & ~vessel, "sky": sky, "vessel": vessel}
+
+
+def region_mean_stderr(se: np.ndarray, mask: np.ndarray, mean: float) -> float:
+    """Standard error of a region's mean from its pixels' standard errors ``se`` (independent
+    per pixel), relative to the region's ``mean``."""
+    return float(np.sqrt(np.sum(se[mask] ** 2)) / mask.sum() / mean)
+
+
 def errors(
     y: np.ndarray, y_ref: np.ndarray, se_ref: np.ndarray, regions: dict[str, np.ndarray]
 ) -> dict[str, float]:
@@ -149,7 +162,7 @@ def errors(
         mean_ref = y_ref[m].mean()
         out[name] = float(np.abs(y[m] - y_ref[m]).mean() / mean_ref)
         out[f"bias_{name}"] = float(y[m].mean() / mean_ref - 1.0)
-        out[f"bias_se_{name}"] = float(np.sqrt(np.sum(se_ref[m] ** 2)) / m.sum() / mean_ref)
+        out[f"bias_se_{name}"] = region_mean_stderr(se_ref, m, mean_ref)
     out["bias"] = out["bias_all"]
     return out
 
@@ -179,9 +192,8 @@ def analyse(rows: list[dict]) -> list[dict]:
 
     ref_rgb, ref_se, _ = load_references()
     first = rows[0]
-    sky = np.isinf(first["distance"])
-    vessel = first["instance"] >= 0
-    regions = {"all": np.ones_like(sky), "sea": ~sky & ~vessel, "sky": sky, "vessel": vessel}
+    regions = region_masks(first["distance"], first["instance"])
+    regions = {"all": np.ones_like(regions["sky"]), **regions}
     table = []
     for row in rows:
         for i, v in enumerate(LEVELS):

@@ -27,17 +27,16 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_modes import LEVELS, SCENE, load_references  # noqa: E402
+from bench_modes import (  # noqa: E402
+    LEVELS,
+    SCENE,
+    load_references,
+    region_masks,
+    region_mean_stderr,
+)
 from bench_passes import replace_section  # noqa: E402
 
 REGIONS = ("sea", "sky", "vessel")
-
-
-def region_masks(pixels) -> dict[str, np.ndarray]:
-    """Sea, sky and vessel pixels of the geometry pass."""
-    sky = np.isinf(pixels.distance_m)
-    vessel = pixels.instance >= 0
-    return {"sea": ~sky & ~vessel, "sky": sky, "vessel": vessel}
 
 
 def measure(photons: int, seeds: int, spp: int) -> dict:
@@ -54,7 +53,7 @@ def measure(photons: int, seeds: int, spp: int) -> dict:
     spec = with_overrides(spec, mode="physical", levels=list(LEVELS))
     rgb, se, _ = load_references()
     session = open_session(spec)
-    masks = region_masks(session.pixels)
+    masks = region_masks(session.pixels.distance_m, session.pixels.instance)
     haze = spec.haze
     sigmas = [channel_extinction(v, haze.threshold, haze.extinction_spectrum) for v in LEVELS]
     renderer = PhysicalRenderer(session.loaded, spec, photons=photons)
@@ -72,10 +71,7 @@ def measure(photons: int, seeds: int, spp: int) -> dict:
                 bias[i, j, k] = y[m].mean() / y_ref[m].mean() - 1.0
     ref_se = np.array(
         [
-            [
-                np.sqrt(np.sum(se[key][masks[n]] ** 2)) / masks[n].sum() / y[masks[n]].mean()
-                for n in REGIONS
-            ]
+            [region_mean_stderr(se[key], masks[n], y[masks[n]].mean()) for n in REGIONS]
             for key, y in zip(keys, refs, strict=True)
         ]
     )

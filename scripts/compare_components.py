@@ -17,15 +17,15 @@ Usage: python scripts/compare_components.py V [--batches 8] [--g 0.75] [--sun 1]
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-SCENE = ROOT / "scenes" / "benchmark.yaml"
-LEVELS = (300.0, 1000.0, 4000.0)
-"""The benchmark's levels: the reference's haze box is sized for them (and ``V``)."""
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+# The benchmark's scene and levels (the reference's haze box is sized for them and ``V``).
+from bench_modes import LEVELS, SCENE, region_masks, region_mean_stderr
 
 
 def volpath_luminance(session, sigma, albedo: float, g: float, batches: int, offset: int):
@@ -92,9 +92,7 @@ def main() -> None:
     clean = np.mean([luminance(r.clean) for r in runs], 0)
 
     pixels = session.pixels
-    sky = np.isinf(pixels.distance_m)
-    vessel = pixels.instance >= 0
-    regions = {"sea": ~sky & ~vessel, "sky": sky, "vessels": vessel}
+    regions = region_masks(pixels.distance_m, pixels.instance)
     regions |= {f"vessel {i}": pixels.instance == i for i in range(3)}
     print(
         f"V = {v:g} m, g = {haze.g}, sun × {args.sun}, sky × {args.sky}; "
@@ -104,7 +102,7 @@ def main() -> None:
         if not m.any():
             continue
         diff = phys[m].mean() / ref[m].mean() - 1.0
-        se = np.sqrt(np.sum(ref_se[m] ** 2)) / m.sum() / ref[m].mean()
+        se = region_mean_stderr(ref_se, m, ref[m].mean())
         clean_diff = clean[m].mean() / clean_ref[m].mean() - 1.0
         print(
             f"  {name:9s} hazy {100 * diff:+6.2f} ± {100 * se:.2f} %   "
