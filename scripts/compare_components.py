@@ -10,8 +10,11 @@ without haze. It prints, per region (sea, sky, all vessels, and each of the
 first three vessels), the relative difference of the region means, physical against volpath,
 ± the volpath mean's standard error (from its batches).
 
+With ``--pitch`` and ``--fov`` the camera looks up or down steeply (the haze's light from
+directions a level view never samples), and ``--bands N`` splits sky and sea into N row bands.
+
 Usage: python scripts/compare_components.py V [--batches 8] [--g 0.75] [--sun 1] [--sky 1]
-       [--heading DEG]
+       [--heading DEG] [--pitch DEG] [--fov DEG] [--bands N]
 """
 
 from __future__ import annotations
@@ -59,6 +62,11 @@ def main() -> None:
     parser.add_argument(
         "--heading", type=float, default=None, help="camera.heading_deg (default: the scene's)"
     )
+    parser.add_argument("--pitch", type=float, default=None, help="camera.pitch_deg")
+    parser.add_argument("--fov", type=float, default=None, help="camera.fov_deg")
+    parser.add_argument(
+        "--bands", type=int, default=0, help="also compare sky and sea in this many row bands"
+    )
     args = parser.parse_args()
 
     from seahaze.imaging import luminance
@@ -72,8 +80,17 @@ def main() -> None:
     changes: dict = {"sun": {"scale": args.sun}, "sky": {"scale": args.sky}}
     if args.g is not None:
         changes["haze"] = {"g": args.g}
-    if args.heading is not None:
-        changes["camera"] = {"heading_deg": args.heading}
+    camera = {
+        key: value
+        for key, value in (
+            ("heading_deg", args.heading),
+            ("pitch_deg", args.pitch),
+            ("fov_deg", args.fov),
+        )
+        if value is not None
+    }
+    if camera:
+        changes["camera"] = camera
     base = with_changes(base, changes)
     haze = base.haze
     v = args.visibility
@@ -94,6 +111,11 @@ def main() -> None:
     pixels = session.pixels
     regions = region_masks(pixels.distance_m, pixels.instance)
     regions |= {f"vessel {i}": pixels.instance == i for i in range(3)}
+    rows = np.arange(pixels.instance.shape[0])[:, None] * np.ones_like(pixels.instance)
+    for band in np.array_split(np.arange(rows.shape[0]), args.bands) if args.bands else []:
+        in_band = np.isin(rows, band)
+        for name in ("sky", "sea"):
+            regions[f"{name} r{band[0]}-{band[-1]}"] = regions[name] & in_band
     print(
         f"V = {v:g} m, g = {haze.g}, sun × {args.sun}, sky × {args.sky}; "
         f"{time.perf_counter() - start:.0f} s"
@@ -105,7 +127,7 @@ def main() -> None:
         se = region_mean_stderr(ref_se, m, ref[m].mean())
         clean_diff = clean[m].mean() / clean_ref[m].mean() - 1.0
         print(
-            f"  {name:9s} hazy {100 * diff:+6.2f} ± {100 * se:.2f} %   "
+            f"  {name:13s} hazy {100 * diff:+6.2f} ± {100 * se:.2f} %   "
             f"clean {100 * clean_diff:+6.2f} %"
         )
 

@@ -68,13 +68,15 @@ def mitsuba_variant() -> str:
     return select_variant("auto")
 
 
-def load_flat_scene(spec: SceneSpec, vessels=(), visibilities=(1000.0,), haze_box=True):
+def load_flat_scene(
+    spec: SceneSpec, vessels=(), visibilities=(1000.0,), haze_box=True, sea_roughness=0.05
+):
     """Load a Mitsuba scene with a flat sea and the given box vessels (``haze_box=False`` for
     the physical mode)."""
     from seahaze.render.scene import build_scene
 
     camera = Camera.from_spec(spec.camera)
-    geometry = SceneGeometry(flat_sea_mesh(), 0.05, None, list(vessels))
+    geometry = SceneGeometry(flat_sea_mesh(), sea_roughness, None, list(vessels))
     return build_scene(spec, camera, geometry, list(visibilities), haze_box=haze_box), camera
 
 

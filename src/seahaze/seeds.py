@@ -50,6 +50,8 @@ class RenderPass(IntEnum):
     """The physical mode's one pass: the clean image and every level, common random numbers."""
     DENOISE_FEATURES = 5
     """The albedo and normal pass that guides the denoiser (``render.denoise: on``)."""
+    VESSEL_LIGHT = 6
+    """The physical mode's second pass: the light vessels send into the haze before them."""
     CONVERGED_REFERENCE = 99
     """Batches of the converged benchmark references (scripts/make_references.py)."""
     VERIFY = 0x7E51F

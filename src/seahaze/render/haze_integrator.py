@@ -44,16 +44,17 @@ leaves once all its paths have ended (:meth:`sample`; docs/physics.md, "The kern
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ..haze import HAZE_BOTTOM_M
 from . import glint_lobe, jit_haze
+from .haze_path import HazePath
 from .jit_haze import TINY_OPTICAL_DEPTH
 from .sun_disk import disk_irradiance, sun_axis, sun_cone_cos
 from .table_texture import TableTexture
+from .vessel_light import VesselLight
 
 DEFAULT_BOUNCES = 3
 """Surface interactions per camera path: sea → sky, vessel → sea → sky. Measured on the
@@ -85,46 +86,6 @@ def _one_minus_exp(tau: Any) -> Any:
     return dr.select(tau < TINY_OPTICAL_DEPTH, tau * (1.0 - 0.5 * tau), 1.0 - dr.exp(-tau))
 
 
-@dataclass
-class _Path:
-    """What a camera path carries from one segment to the next (drjit values; a dataclass is
-    a drjit pytree, so it can be the state of a symbolic loop)."""
-
-    ray: Any
-    active: Any
-    depth: Any
-    beta: Any
-    clean: Any
-    res: list
-    """Each level's radiance so far."""
-    att: list
-    """Each level's transmittance from the camera to the path's current vertex."""
-    prev_si: Any
-    """The last surface as an ``Interaction3f`` (its position is all the sky's density needs):
-    a whole ``SurfaceInteraction3f`` would carry some fifty more values through the loop."""
-    prev_pdf: Any
-    prev_delta: Any
-
-    @classmethod
-    def start(cls, ray: Any, active: Any, n_levels: int, grey: bool) -> _Path:
-        """A path at the camera; ``grey`` levels carry one transmittance, not an RGB one."""
-        import drjit as dr
-        import mitsuba as mi
-
-        return cls(
-            ray=ray,
-            active=active,
-            depth=mi.UInt32(0),
-            beta=mi.Color3f(1.0),
-            clean=mi.Color3f(0.0),
-            res=[mi.Color3f(0.0) for _ in range(n_levels)],
-            att=[mi.Float(1.0) if grey else mi.Color3f(1.0) for _ in range(n_levels)],
-            prev_si=dr.zeros(mi.Interaction3f),
-            prev_pdf=mi.Float(1.0),
-            prev_delta=mi.Bool(True),
-        )
-
-
 def make_integrator(
     sun: Any,
     sky: Any,
@@ -136,6 +97,7 @@ def make_integrator(
     *,
     wind_speed: float,
     glint_share: float = glint_lobe.GLINT_SHARE,
+    vessels_only: bool = False,
 ) -> Any:
     """A new haze integrator for ``n_levels`` hazy levels (class defined lazily: it needs a
     Mitsuba variant). ``grey`` levels have one extinction for R, G and B (a third of the
@@ -144,7 +106,10 @@ def make_integrator(
     the tables. ``sun`` and ``sky`` (the scene's ``sunsky`` split in two) are the lights the
     surfaces sample, one sample each per surface interaction. ``wind_speed`` (m/s, the sea's)
     sets the width of the sun glint's lobe, of which a hull facing it draws ``glint_share`` of
-    its next directions (:mod:`seahaze.render.glint_lobe`).
+    its next directions (:mod:`seahaze.render.glint_lobe`). ``vessels_only``: the integrator
+    of the vessel-light pass, which renders only each level's correction for the light of the
+    vessels in the haze in front of them (:mod:`seahaze.render.vessel_light`; its clean
+    radiance is 0).
     """
     import drjit as dr
     import mitsuba as mi
@@ -156,6 +121,7 @@ def make_integrator(
             super().__init__(props)
             self.n_levels, self.grey = n_levels, grey
             self.bounces, self.camera_points = bounces, camera_points
+            self.vessels_only = vessels_only
             self.sun, self.sky = sun, sky
             # The sun's disk, sampled uniformly here: sunsky's own sampling of it also
             # evaluates the sky's 20-Gaussian density, and its density (a float32 solid angle
@@ -168,6 +134,7 @@ def make_integrator(
             # Where the sea's sun glint lies seen from a hull (glint_lobe module).
             self.glint = glint_lobe.GlintLobe(sun_axis(sun), wind_speed, glint_share)
             self.top, self.bottom = top_m, HAZE_BOTTOM_M
+            self.vessels = VesselLight(self)
             self.set_levels(
                 np.full((n_levels, 3), 1e-3),
                 np.full(n_levels, 1.0 / n_levels),
@@ -337,18 +304,18 @@ def make_integrator(
                 frac -= dr.select(hidden, beyond / dr.maximum(s_pdf, 1e-30), 0.0)
                 p.res[k] += dr.select(lit, p.att[k] * weight * frac, 0.0)
 
-        def inscatter(self, scene, sampler, ray, enter, length, weight, att, res, active, sun_mis):
+        def inscatter(
+            self, scene, sampler, ray, enter, length, weight, att, res, active, sun_mis, shade=True
+        ):
             """Add every level's in-scattering along ``ray`` over ``[enter, enter + length]``
             (``weight``: the path throughput, None on the camera segment; ``att``: each level's
             transmittance so far; ``sun_mis``: the weight of the unshadowed sun against
-            :meth:`sample_aureole` at the surface the segment left). See the module
-            docstring."""
+            :meth:`sample_aureole` at the surface the segment left; ``shade``: whether surfaces
+            may shade the sun from the segment). See the module docstring."""
             beta = mi.Color3f(1.0) if weight is None else weight
-            sun_d = self.sun_cone_direction(sampler.next_2d(active))
-            lit, sun = self.sun_source(sun_d, ray.d, active)
-            mu_sun = dr.maximum(sun_d.z, 1e-6)
+            sun = self.sun_toward(sampler, ray, enter, active)
+            _, _, source_sun, depth, climb = sun
             z_entry = ray.o.z + enter * ray.d.z
-            depth, climb = dr.maximum(self.top - z_entry, 0.0) / mu_sun, 1.0 - ray.d.z / mu_sun
             pick = sampler.next_1d(active)
             tables = self.table.toward(-ray.d, self.sun_cos_az, self.sun_sin_az, pick)
             # Stratified, and the same for every level (common random numbers).
@@ -368,50 +335,91 @@ def make_integrator(
                     if not self.grey:  # distances follow green; reweight R and B
                         value = value * dr.exp(-(self.sigma[k] - sg) * s)
                     diffuse += value
-                source = sun * frac * sun_mis + (mass * inv_sg * (1.0 / n_points)) * diffuse
+                source = source_sun * frac * sun_mis + (mass * inv_sg * (1.0 / n_points)) * diffuse
                 res[k] += dr.select(active, att[k] * beta * source, 0.0)
-            # The shadow correction: one shared point and shadow ray.
-            s, pdf = self.mixture_distance(sampler.next_1d(active), length)
-            x = ray(enter + s)
-            shadow = mi.Ray3f(x, sun_d, ray.time, ray.wavelengths)
+            if shade:
+                self.sun_shadow(scene, sampler, ray, enter, length, beta, att, res, sun)
+
+        def sun_toward(self, sampler, ray, enter, active):
+            """The sun as the haze along ``ray`` sees it: a direction in its disk, whether it
+            lights the haze, its single-scattering source toward ``-ray.d`` per unit extinction
+            (:meth:`sun_source`), and the slab depth toward it where the ray enters the slab
+            and its growth per metre (:meth:`sun_scattered`)."""
+            sun_d = self.sun_cone_direction(sampler.next_2d(active))
+            lit, source = self.sun_source(sun_d, ray.d, active)
+            mu_sun = dr.maximum(sun_d.z, 1e-6)
+            z_entry = ray.o.z + enter * ray.d.z
+            depth = dr.maximum(self.top - z_entry, 0.0) / mu_sun
+            return sun_d, lit, source, depth, 1.0 - ray.d.z / mu_sun
+
+        def sun_shadow(self, scene, sampler, ray, enter, length, beta, att, res, sun):
+            """Take from every level the sun's single scattering along ``ray`` that surfaces
+            shade (``sun``: :meth:`sun_toward`): one point from the levels' mixture and one
+            shadow ray, shared by every level."""
+            sun_d, lit, source, depth, climb = sun
+            s, pdf = self.mixture_distance(sampler.next_1d(lit), length)
+            shadow = mi.Ray3f(ray(enter + s), sun_d, ray.time, ray.wavelengths)
             shaded = lit & scene.ray_test(shadow, lit)
-            scale = beta * sun / dr.maximum(pdf, 1e-30)
+            scale = beta * source / dr.maximum(pdf, 1e-30)
             for k in range(self.n_levels):
                 lost = self.sun_scattered_at(k, depth, climb, s) * scale
                 res[k] -= dr.select(shaded, att[k] * lost, 0.0)
 
         # -- the path ---------------------------------------------------------------------
         def sample(self, scene, sampler, ray, medium=None, active=True):
-            path = _Path.start(mi.Ray3f(ray), mi.Bool(active), self.n_levels, self.grey)
+            if self.vessels_only:
+                return self.vessels.sample(scene, sampler, ray, active)
+            path = HazePath.start(mi.Ray3f(ray), mi.Bool(active), self.n_levels, self.grey)
             # The camera segment is unrolled (it takes CAMERA_POINTS in-scattering points);
             # later ones run in a loop that a packet of lanes leaves once all its paths have
             # ended: most end at the sky after one or two segments, and an unrolled kernel
             # paid for every bounce of every lane.
             self.bounce(scene, sampler, path, camera=True)
+            path = self.follow(scene, sampler, path)
+            aovs = [c for r in path.res for c in (r.x, r.y, r.z)]
+            return mi.Spectrum(path.clean), mi.Bool(True), aovs
+
+        def follow(self, scene, sampler, path):
+            """Path ``path`` traced on, segment by segment, until it ends."""
 
             def body(path, sampler):
                 self.bounce(scene, sampler, path, camera=False)
                 return path, sampler
 
-            path, sampler = dr.while_loop(
+            path, _ = dr.while_loop(
                 (path, sampler), lambda path, sampler: path.active, body, label="haze_path"
             )
-            aovs = [c for r in path.res for c in (r.x, r.y, r.z)]
-            return mi.Spectrum(path.clean), mi.Bool(True), aovs
+            return path
 
-        def bounce(self, scene, sampler, p, camera):
-            """One segment of path ``p`` (a :class:`_Path`, updated in place): the haze along
+        def bounce(self, scene, sampler, p, camera, hit=None, free=False):
+            """One segment of path ``p`` (a :class:`HazePath`, updated in place): the haze along
             it, the sky where it escapes, and at the surface it meets the lights and the next
-            direction (up to ``bounces`` surfaces)."""
-            si = scene.ray_intersect(p.ray, p.active)
-            t_end = dr.select(si.is_valid(), si.t, dr.inf)
+            direction (up to ``bounces`` surfaces). ``hit``: the segment's end, if already
+            found (the surface and its distance); ``free``: the segment runs through the open
+            sea's haze of the tables (no surface shades it, and the sun's disk is not its
+            light: :meth:`.VesselLight.vessel_light`)."""
+            if hit is None:
+                si = scene.ray_intersect(p.ray, p.active)
+                t_end = dr.select(si.is_valid(), si.t, dr.inf)
+            else:
+                si, t_end = hit
             enter, length = self.slab_length(p.ray.o, p.ray.d, t_end)
             segment = [self.transmittance(k, length) for k in range(self.n_levels)]
             sun_mis = dr.select(p.prev_delta, 1.0, _mis(p.prev_pdf, self.aureole_pdf(p.ray.d)))
             weight = None if camera else p.beta
             in_haze = p.active & (length > 0.0)
             self.inscatter(
-                scene, sampler, p.ray, enter, length, weight, p.att, p.res, in_haze, sun_mis
+                scene,
+                sampler,
+                p.ray,
+                enter,
+                length,
+                weight,
+                p.att,
+                p.res,
+                in_haze,
+                sun_mis,
+                shade=not free,
             )
 
             # The sky and the sun at the end of an escaping segment, each with MIS against
@@ -420,9 +428,11 @@ def make_integrator(
             ds_hit = mi.DirectionSample3f(scene, si, p.prev_si)
             in_disk = escaped & (dr.dot(p.ray.d, self.sun_axis) >= self.sun_cos)
             sun_pdf = dr.select(in_disk, self.sun_pdf, 0.0)
-            seen = self.sun.eval(si, in_disk) * dr.select(
-                p.prev_delta, 1.0, _mis(p.prev_pdf, sun_pdf)
-            )
+            seen = mi.Color3f(0.0)
+            if not free:
+                seen = self.sun.eval(si, in_disk) * dr.select(
+                    p.prev_delta, 1.0, _mis(p.prev_pdf, sun_pdf)
+                )
             sky_pdf = self.sky.pdf_direction(p.prev_si, ds_hit, escaped & ~p.prev_delta)
             mis_sky = dr.select(p.prev_delta, 1.0, _mis(p.prev_pdf, sky_pdf))
             seen += self.sky.eval(si, escaped) * mis_sky

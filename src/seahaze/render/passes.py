@@ -154,10 +154,12 @@ def render_radiance(
     integrator: Any = None,
     *,
     clean: bool = False,
+    clip: bool = True,
 ) -> np.ndarray:
     """Render linear RGB radiance (H, W, 3) float32 with the scene's current medium, by the
     scene's integrator or ``integrator`` (the physical mode's); ``clean`` renders the scene
-    without the haze box (:attr:`LoadedScene.clean_scene`)."""
+    without the haze box (:attr:`LoadedScene.clean_scene`); ``clip=False`` keeps negative
+    values (a correction, not a radiance)."""
     import mitsuba as mi
 
     scene = loaded.clean_scene if clean and loaded.clean_scene is not None else loaded.scene
@@ -168,7 +170,8 @@ def render_radiance(
     # (RGB -58 for +3819 red: its reddened colour lies outside the sRGB gamut), so the sun, its
     # glint and sunlit pixels can come out negative in blue. Clipping at zero is the gamut clip
     # (light is never negative); NaN stays NaN for the tests to catch.
-    return np.maximum(np.array(image, dtype=np.float32), 0.0)
+    image = np.array(image, dtype=np.float32)
+    return np.maximum(image, 0.0) if clip else image
 
 
 def render_clean(loaded: LoadedScene, spp: int, seed: int, albedo: float, g: float) -> np.ndarray:

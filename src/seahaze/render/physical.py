@@ -18,6 +18,7 @@ import numpy as np
 
 from ..haze import Extinction, extinction_rgb
 from ..ocean.whitecaps import FOAM_REFLECTANCE
+from ..seeds import RenderPass, render_seed
 from ..spec import SceneSpec
 from .diffuse_table import DEFAULT_GRID, TableGrid, build_tables
 from .glint_lobe import GLINT_SHARE
@@ -33,6 +34,9 @@ MAX_TABLE_PHOTONS = 1 << 20
 """Most photons per level table: ~4 s for eleven tables on this project's 2-vCPU machine."""
 SAMPLES_PER_PHOTON = 32
 """Camera samples (pixels × spp) per table photon, before rounding and the bounds above."""
+VESSEL_LIGHT_SHARE = 0.25
+"""The vessel-light pass's samples per pixel as a share of the main pass's (docs/physics.md,
+"Haze in front of a vessel": its cost and noise)."""
 MAX_LEVELS_PER_PASS = 12
 """Most levels one pass renders (its kernel's size grows with the count)."""
 FILM_BUDGET_BYTES = 2 << 30
@@ -202,7 +206,9 @@ class PhysicalRenderer:
             foam_coverage=loaded.sea_foam_coverage,
             foam_reflectance=loaded.sea_foam_reflectance,
         )
-        self._integrators: dict[tuple[int, bool], Any] = {}
+        self._integrators: dict[tuple[int, bool, bool], Any] = {}
+        # Every surface but the sea is a vessel (scene.build_scene registers them).
+        self.sea_id = next(key for key, kind in loaded.shape_ids.items() if kind == -1)
 
     def tables(
         self,
@@ -266,16 +272,42 @@ class PhysicalRenderer:
             integrator.set_levels(
                 part_sigma, np.full(n, 1.0 / n), albedo, g, part_tables, self.sun_azimuth_rad
             )
+            integrator.vessels.set_sea(self.sea_id)
             image = render_radiance(self.loaded, stratified_spp(spp), seed, integrator=integrator)
             if clean is None:
                 clean = image[..., :3].copy()
             if len(sigma):
-                levels += [image[..., 3 + 3 * k : 6 + 3 * k].copy() for k in range(n)]
+                if VESSEL_LIGHT_SHARE > 0.0:
+                    image += self._vessel_light(n, part_sigma, albedo, g, part_tables, spp, seed)
+                # Light is never negative: render_radiance's gamut clip, after the correction.
+                levels += [np.maximum(image[..., 3 + 3 * k : 6 + 3 * k], 0.0) for k in range(n)]
         assert clean is not None
         return PhysicalPass(clean, levels, table_seconds)
 
-    def _integrator(self, n_levels: int, grey: bool) -> Any:
-        key = (n_levels, grey)
+    def _vessel_light(
+        self,
+        n: int,
+        sigma: np.ndarray,
+        albedo: float,
+        g: float,
+        tables: np.ndarray,
+        spp: int,
+        seed: int,
+    ) -> np.ndarray:
+        """The second pass for ``n`` levels of extinction ``sigma`` (L, 3) with their
+        ``tables``: what each level gains from the light vessels send into the haze in front
+        of them (``HazeIntegrator.vessel_light``; negative where a vessel is darker than the
+        open sea and sky it hides), at :func:`vessel_light_spp` of ``spp``."""
+        grey = bool(np.all(sigma == sigma[:, 1:2]))
+        integrator = self._integrator(n, grey, vessels_only=True)
+        integrator.set_levels(sigma, np.full(n, 1.0 / n), albedo, g, tables, self.sun_azimuth_rad)
+        integrator.vessels.set_sea(self.sea_id)
+        pass_seed = render_seed(seed, RenderPass.VESSEL_LIGHT)
+        samples = vessel_light_spp(spp)
+        return render_radiance(self.loaded, samples, pass_seed, integrator=integrator, clip=False)
+
+    def _integrator(self, n_levels: int, grey: bool, vessels_only: bool = False) -> Any:
+        key = (n_levels, grey, vessels_only)
         if key not in self._integrators:
             top = self.loaded.haze_top_m
             self._integrators[key] = make_integrator(
@@ -287,8 +319,16 @@ class PhysicalRenderer:
                 self.bounces,
                 wind_speed=self.wind_speed,
                 glint_share=self.glint_share,
+                vessels_only=vessels_only,
             )
         return self._integrators[key]
+
+
+def vessel_light_spp(spp: int) -> int:
+    """Samples per pixel of the vessel-light pass for ``spp`` of the main pass: the share
+    :data:`VESSEL_LIGHT_SHARE` of them, at least one, as the ``multijitter`` sampler takes
+    them (a share of 0 leaves the pass out, for comparisons)."""
+    return stratified_spp(max(1, round(spp * VESSEL_LIGHT_SHARE)))
 
 
 def levels_per_pass(width: int, height: int, n_levels: int) -> int:
