@@ -10,11 +10,13 @@ without haze. It prints, per region (sea, sky, all vessels, and each of the
 first three vessels), the relative difference of the region means, physical against volpath,
 ± the volpath mean's standard error (from its batches).
 
-With ``--pitch`` and ``--fov`` the camera looks up or down steeply (the haze's light from
-directions a level view never samples), and ``--bands N`` splits sky and sea into N row bands.
+``--vessel-light 0.333`` switches on the pass for the haze in front of vessels (off by
+default; docs/physics.md, "Haze in front of a vessel"). With ``--pitch`` and ``--fov`` the
+camera looks up or down steeply (the haze's light from directions a level view never
+samples), and ``--bands N`` splits sky and sea into N row bands.
 
 Usage: python scripts/compare_components.py V [--batches 8] [--g 0.75] [--sun 1] [--sky 1]
-       [--heading DEG] [--pitch DEG] [--fov DEG] [--bands N]
+       [--heading DEG] [--pitch DEG] [--fov DEG] [--bands N] [--vessel-light SHARE]
 """
 
 from __future__ import annotations
@@ -67,15 +69,23 @@ def main() -> None:
     parser.add_argument(
         "--bands", type=int, default=0, help="also compare sky and sea in this many row bands"
     )
+    parser.add_argument(
+        "--vessel-light",
+        type=float,
+        default=0.0,
+        help="the vessel-light pass's share of the samples (0: off, the default)",
+    )
     args = parser.parse_args()
 
     from seahaze.imaging import luminance
+    from seahaze.render import physical
     from seahaze.render.engine import open_session
     from seahaze.render.physical import MAX_TABLE_PHOTONS, PhysicalRenderer
     from seahaze.sceneio import load_scene
     from seahaze.spec import with_changes, with_overrides
     from seahaze.visibility import channel_extinction
 
+    physical.VESSEL_LIGHT_SHARE = args.vessel_light
     base, _ = load_scene(SCENE)
     changes: dict = {"sun": {"scale": args.sun}, "sky": {"scale": args.sky}}
     if args.g is not None:
