@@ -313,9 +313,11 @@ def make_integrator(
             :meth:`sample_aureole` at the surface the segment left; ``shade``: whether surfaces
             may shade the sun from the segment). See the module docstring."""
             beta = mi.Color3f(1.0) if weight is None else weight
-            sun = self.sun_toward(sampler, ray, enter, active)
-            _, _, source_sun, depth, climb = sun
+            sun_d = self.sun_cone_direction(sampler.next_2d(active))
+            lit, sun = self.sun_source(sun_d, ray.d, active)
+            mu_sun = dr.maximum(sun_d.z, 1e-6)
             z_entry = ray.o.z + enter * ray.d.z
+            depth, climb = dr.maximum(self.top - z_entry, 0.0) / mu_sun, 1.0 - ray.d.z / mu_sun
             pick = sampler.next_1d(active)
             tables = self.table.toward(-ray.d, self.sun_cos_az, self.sun_sin_az, pick)
             # Stratified, and the same for every level (common random numbers).
@@ -335,32 +337,16 @@ def make_integrator(
                     if not self.grey:  # distances follow green; reweight R and B
                         value = value * dr.exp(-(self.sigma[k] - sg) * s)
                     diffuse += value
-                source = source_sun * frac * sun_mis + (mass * inv_sg * (1.0 / n_points)) * diffuse
+                source = sun * frac * sun_mis + (mass * inv_sg * (1.0 / n_points)) * diffuse
                 res[k] += dr.select(active, att[k] * beta * source, 0.0)
-            if shade:
-                self.sun_shadow(scene, sampler, ray, enter, length, beta, att, res, sun)
-
-        def sun_toward(self, sampler, ray, enter, active):
-            """The sun as the haze along ``ray`` sees it: a direction in its disk, whether it
-            lights the haze, its single-scattering source toward ``-ray.d`` per unit extinction
-            (:meth:`sun_source`), and the slab depth toward it where the ray enters the slab
-            and its growth per metre (:meth:`sun_scattered`)."""
-            sun_d = self.sun_cone_direction(sampler.next_2d(active))
-            lit, source = self.sun_source(sun_d, ray.d, active)
-            mu_sun = dr.maximum(sun_d.z, 1e-6)
-            z_entry = ray.o.z + enter * ray.d.z
-            depth = dr.maximum(self.top - z_entry, 0.0) / mu_sun
-            return sun_d, lit, source, depth, 1.0 - ray.d.z / mu_sun
-
-        def sun_shadow(self, scene, sampler, ray, enter, length, beta, att, res, sun):
-            """Take from every level the sun's single scattering along ``ray`` that surfaces
-            shade (``sun``: :meth:`sun_toward`): one point from the levels' mixture and one
-            shadow ray, shared by every level."""
-            sun_d, lit, source, depth, climb = sun
-            s, pdf = self.mixture_distance(sampler.next_1d(lit), length)
-            shadow = mi.Ray3f(ray(enter + s), sun_d, ray.time, ray.wavelengths)
+            if not shade:
+                return
+            # The shadow correction: one shared point and shadow ray.
+            s, pdf = self.mixture_distance(sampler.next_1d(active), length)
+            x = ray(enter + s)
+            shadow = mi.Ray3f(x, sun_d, ray.time, ray.wavelengths)
             shaded = lit & scene.ray_test(shadow, lit)
-            scale = beta * source / dr.maximum(pdf, 1e-30)
+            scale = beta * sun / dr.maximum(pdf, 1e-30)
             for k in range(self.n_levels):
                 lost = self.sun_scattered_at(k, depth, climb, s) * scale
                 res[k] -= dr.select(shaded, att[k] * lost, 0.0)

@@ -26,7 +26,7 @@ from .haze_integrator import DEFAULT_BOUNCES, make_integrator
 from .jit_haze import owned_floats
 from .passes import render_radiance
 from .photon_tracer import SeaReflectance
-from .scene import LoadedScene, stratified_spp, sunsky_dict
+from .scene import SEA_SHAPE, LoadedScene, stratified_spp, sunsky_dict
 
 MIN_TABLE_PHOTONS = 1 << 17
 """Fewest photons per level table (half from the sun, half from the sky)."""
@@ -214,7 +214,7 @@ class PhysicalRenderer:
         )
         self._integrators: dict[tuple[int, bool, bool], Any] = {}
         # Every surface but the sea is a vessel (scene.build_scene registers them).
-        self.sea_id = next(key for key, kind in loaded.shape_ids.items() if kind == -1)
+        self.sea_id = next(key for key, kind in loaded.shape_ids.items() if kind == SEA_SHAPE)
 
     def tables(
         self,
@@ -271,7 +271,8 @@ class PhysicalRenderer:
             else:
                 part_sigma = sigma[part]
                 part_tables = tables[..., 3 * first : 3 * (first + n)]
-            integrator = self._integrator(n, bool(np.all(part_sigma == part_sigma[:, 1:2])))
+            grey = bool(np.all(part_sigma == part_sigma[:, 1:2]))
+            integrator = self._integrator(n, grey)
             if part_tables is None:
                 grid = DEFAULT_GRID
                 part_tables = np.zeros((grid.n_z, grid.n_mu, grid.n_phi, 3), np.float32)
@@ -284,7 +285,9 @@ class PhysicalRenderer:
                 clean = image[..., :3].copy()
             if len(sigma):
                 if VESSEL_LIGHT_SHARE > 0.0:
-                    image += self._vessel_light(n, part_sigma, albedo, g, part_tables, spp, seed)
+                    image += self._vessel_light(
+                        n, grey, part_sigma, albedo, g, part_tables, spp, seed
+                    )
                 # Light is never negative: render_radiance's gamut clip, after the correction.
                 levels += [np.maximum(image[..., 3 + 3 * k : 6 + 3 * k], 0.0) for k in range(n)]
         assert clean is not None
@@ -293,6 +296,7 @@ class PhysicalRenderer:
     def _vessel_light(
         self,
         n: int,
+        grey: bool,
         sigma: np.ndarray,
         albedo: float,
         g: float,
@@ -300,11 +304,11 @@ class PhysicalRenderer:
         spp: int,
         seed: int,
     ) -> np.ndarray:
-        """The second pass for ``n`` levels of extinction ``sigma`` (L, 3) with their
-        ``tables``: what each level gains from the light vessels send into the haze in front
-        of them (``HazeIntegrator.vessel_light``; negative where a vessel is darker than the
-        open sea and sky it hides), at :func:`vessel_light_spp` of ``spp``."""
-        grey = bool(np.all(sigma == sigma[:, 1:2]))
+        """The second pass for ``n`` levels (``grey``: one extinction for R, G and B) of
+        extinction ``sigma`` (L, 3) with their ``tables``: what each level gains from the light
+        vessels send into the haze in front of them (:meth:`.VesselLight.vessel_light`;
+        negative where a vessel is darker than the open sea and sky it hides), at
+        :func:`vessel_light_spp` of ``spp``."""
         integrator = self._integrator(n, grey, vessels_only=True)
         integrator.set_levels(sigma, np.full(n, 1.0 / n), albedo, g, tables, self.sun_azimuth_rad)
         integrator.vessels.set_sea(self.sea_id)

@@ -44,6 +44,8 @@ from ..world import (
 )
 from .fleet import PAINT_ATTRIBUTE, fleet_meshes, loaded_vessel_bsdfs
 
+SEA_SHAPE = -1
+""":attr:`LoadedScene.shape_ids` value of the sea mesh."""
 VESSEL_SHAPE = -4
 """:attr:`LoadedScene.shape_ids` value of the vessel meshes (the face tells which vessel)."""
 HAZE_ID = "haze"
@@ -369,7 +371,7 @@ def build_scene(
         if sid in faces_of:
             shape_ids[key], vessel_faces[key] = VESSEL_SHAPE, faces_of[sid]
         else:
-            shape_ids[key] = -2 if sid == HAZE_BOX_ID else -1
+            shape_ids[key] = -2 if sid == HAZE_BOX_ID else SEA_SHAPE
     return LoadedScene(
         loaded,
         params,

@@ -21,11 +21,6 @@ from typing import Any
 from . import jit_haze
 from .haze_path import HazePath
 
-PROBES = 1
-"""Probes per camera sample of the pass. Measured at 1280×720, 42 spp (docs/physics.md): two
-probes on a quarter of the samples took the 12-image set to 3.26× Mitsuba's clean pass for
-46.3 dB at 4000 m; one probe on a third (``physical.VESSEL_LIGHT_SHARE``), 2.87× for 45.8 dB."""
-
 
 class VesselLight:
     """The vessel-light pass of haze integrator ``haze``, whose slab and level helpers
@@ -55,14 +50,11 @@ class VesselLight:
         t_end = dr.select(si.is_valid(), si.t, dr.inf)
         enter, length = self.haze.slab_length(ray.o, ray.d, t_end)
         res = [dr.zeros(mi.Color3f) for _ in range(self.haze.n_levels)]
-        for _ in range(PROBES):
-            self.vessel_light(
-                scene, sampler, ray, enter, length, res, active & (length > 0.0), 1.0 / PROBES
-            )
+        self.vessel_light(scene, sampler, ray, enter, length, res, active & (length > 0.0))
         aovs = [c for r in res for c in (r.x, r.y, r.z)]
         return mi.Spectrum(0.0), mi.Bool(True), aovs
 
-    def vessel_light(self, scene, sampler, ray, enter, length, res, active, weight=1.0):
+    def vessel_light(self, scene, sampler, ray, enter, length, res, active):
         """Correct the camera segment's diffuse in-scattering for the vessels: the tables'
         field is that of the open sea, but haze in front of a vessel sees the vessel.
 
@@ -76,7 +68,7 @@ class VesselLight:
         function most of the light scattered toward the camera just in front of a vessel
         came from the vessel: a shaded hull against the bright haze toward the sun is
         darker than the open-sea field makes it (docs/physics.md, "Haze in front of a
-        vessel"). ``weight``: this probe's share of the sample (one over the probes)."""
+        vessel"; one probe per sample: two on fewer samples cost more for the same noise)."""
         import drjit as dr
         import mitsuba as mi
 
@@ -90,7 +82,7 @@ class VesselLight:
         si = scene.ray_intersect(probe, active)
         on_vessel = active & self.is_vessel(si)
         _, to_vessel = haze.slab_length(probe.o, d, si.t)
-        scale = weight * haze.albedo / dr.maximum(pdf, 1e-30)
+        scale = haze.albedo / dr.maximum(pdf, 1e-30)
         start = [
             dr.select(on_vessel, haze.ext[k] * haze.transmittance(k, s + to_vessel), 0.0) * scale
             for k in range(haze.n_levels)
@@ -115,14 +107,12 @@ class VesselLight:
             ]
             return res, mi.Bool(False), sampler
 
-        gained, _, _ = dr.while_loop(
-            ([dr.zeros(type(r)) for r in res], on_vessel, sampler),
+        res[:], _, _ = dr.while_loop(
+            (res, on_vessel, sampler),
             lambda res, pending, sampler: pending,
             body,
             label="vessel_light",
         )
-        for k in range(haze.n_levels):
-            res[k] += gained[k]
 
     def is_vessel(self, si):
         """Whether ``si`` lies on a vessel (a valid hit that is not the sea)."""
