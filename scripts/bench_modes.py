@@ -2,7 +2,9 @@
 
 The benchmark scene (``scenes/benchmark.yaml``, 80×45) is rendered at 300, 1000 and 4000 m by
 each mode at several sample counts. Each configuration runs in its own process, so its peak
-memory is its own; kernels are compiled by a 1-spp warm-up render first, so the times are warm.
+memory is its own; kernels are compiled by a warm-up render first (1 spp, or in ``physical``,
+whose sampler bakes its count into the kernels, the same spp and another seed), so the times
+are warm.
 Errors are measured against the converged ``reference`` images in
 ``assets/references/benchmark/`` (``scripts/make_references.py``; checksums verified):
 
@@ -56,7 +58,11 @@ def child(mode: str, spp: int, out: Path) -> None:
 
     spec, _ = load_scene(SCENE)
     spec = with_overrides(spec, spp=spp, mode=mode, levels=[float(v) for v in LEVELS])
-    render_scene(with_overrides(spec, spp=1), "warm-up")  # compiles every kernel
+    # Compiles every kernel. The physical pass's multijitter sampler bakes its sample count
+    # into the kernels (the main pass's and the vessel-light pass's), so its warm-up takes the
+    # same count, with another seed; the other modes' kernels serve every count.
+    warm_spp = spp if mode == "physical" else 1
+    render_scene(with_overrides(spec, spp=warm_spp, seed=spec.render.seed + 1), "warm-up")
     scene = render_scene(spec, "benchmark")
     if mode == "physical":
         # One pass renders the clean image and every level: its time shared by the levels.
