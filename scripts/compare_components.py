@@ -10,8 +10,9 @@ without haze. It prints, per region (sea, sky, all vessels, and each of the
 first three vessels), the relative difference of the region means, physical against volpath,
 ± the volpath mean's standard error (from its batches).
 
-``--vessel-light 0.333`` switches on the pass for the haze in front of vessels (off by
-default; docs/physics.md, "Haze in front of a vessel"). With ``--pitch`` and ``--fov`` the
+``--vessel-light SHARE`` sets the share of the samples of the pass for the haze in front of
+vessels (the renderer's own by default; 0 leaves it out; docs/physics.md, "Haze in front of
+a vessel"). With ``--pitch`` and ``--fov`` the
 camera looks up or down steeply (the haze's light from directions a level view never
 samples), and ``--bands N`` splits sky and sea into N row bands.
 
@@ -72,8 +73,8 @@ def main() -> None:
     parser.add_argument(
         "--vessel-light",
         type=float,
-        default=0.0,
-        help="the vessel-light pass's share of the samples (0: off, the default)",
+        default=None,
+        help="the vessel-light pass's share of the samples (0: off; default: the renderer's)",
     )
     args = parser.parse_args()
 
@@ -85,7 +86,8 @@ def main() -> None:
     from seahaze.spec import with_changes, with_overrides
     from seahaze.visibility import channel_extinction
 
-    physical.VESSEL_LIGHT_SHARE = args.vessel_light
+    if args.vessel_light is not None:
+        physical.VESSEL_LIGHT_SHARE = args.vessel_light
     base, _ = load_scene(SCENE)
     changes: dict = {"sun": {"scale": args.sun}, "sky": {"scale": args.sky}}
     if args.g is not None:

@@ -11,7 +11,13 @@ import numpy as np
 import pytest
 
 from seahaze import vessels
-from seahaze.render.fleet import HIDDEN_DEPTH_M, ROUGHNESS_CLASSES, fleet_meshes, roughness_class
+from seahaze.render.fleet import (
+    HIDDEN_DEPTH_M,
+    ROUGHNESS_CLASSES,
+    fleet_meshes,
+    roughness_class,
+    vessel_spheres,
+)
 from seahaze.sceneio import parse_scene_text
 from seahaze.vessels.materials import Material
 from seahaze.world import build_geometry, frame_camera
@@ -89,6 +95,25 @@ def test_every_part_keeps_its_faces_paint_and_vessel() -> None:
             )
             assert np.all(mesh.face_vessel[start : start + len(part.faces)] == index)
             start += len(part.faces)
+
+
+def test_every_vessel_lies_in_its_bounding_sphere() -> None:
+    """The sphere the vessel-light pass aims at holds every vertex of its vessel (and of no
+    placeholder), centred on the vessel's bounding box, and is no larger than the box's
+    half-diagonal nor smaller than its half-length."""
+    spec = parse_scene_text(SCENE, "fleet.yaml")
+    camera = frame_camera(spec, None)
+    geometry = build_geometry(spec, camera, None)
+    fleet = fleet_meshes(geometry.vessels, (camera.x_m, camera.y_m))
+    spheres = vessel_spheres(fleet, len(geometry.vessels))
+    assert spheres.shape == (3, 4)
+    for vessel, (x, y, z, radius) in zip(geometry.vessels, spheres, strict=True):
+        points = np.concatenate([part.vertices for part in vessel.parts]).astype(float)
+        low, high = points.min(axis=0), points.max(axis=0)
+        np.testing.assert_allclose([x, y, z], 0.5 * (low + high), atol=1e-3)
+        assert np.all(np.linalg.norm(points - [x, y, z], axis=1) <= radius + 1e-6)
+        assert 0.5 * np.max(high - low) - 1e-6 <= radius <= 0.5 * np.linalg.norm(high - low) + 1e-6
+    assert vessel_spheres(fleet, 0).shape == (0, 4)
 
 
 def _kernel_code(entry: dict) -> str:

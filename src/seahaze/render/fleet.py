@@ -109,6 +109,24 @@ def _merge(
     return FleetMesh(name, roughness, vertices, faces, paint, face_vessel)
 
 
+def vessel_spheres(fleet: Sequence[FleetMesh], n_vessels: int) -> np.ndarray:
+    """A sphere around every vessel, (``n_vessels``, 4): centre x, y, z and radius (m).
+
+    The centre is that of the vessel's bounding box, the radius its farthest vertex from it:
+    a bound the vessel-light pass aims its probes at (:mod:`seahaze.render.vessel_light`). A
+    vessel with no face (none of the built-in ones) gets radius 0."""
+    spheres = np.zeros((n_vessels, 4), np.float64)
+    for vessel in range(n_vessels):
+        points = [part.vertices[part.faces[part.face_vessel == vessel].ravel()] for part in fleet]
+        points = np.concatenate(points).astype(np.float64)
+        if len(points) == 0:
+            continue
+        centre = 0.5 * (points.min(axis=0) + points.max(axis=0))
+        spheres[vessel, :3] = centre
+        spheres[vessel, 3] = np.sqrt(np.max(np.sum((points - centre) ** 2, axis=1)))
+    return spheres
+
+
 def vessel_bsdf(roughness: float, black: bool = False) -> dict:
     """Painted steel — a dielectric varnish (GGX ``alpha`` = roughness, at least
     :data:`MIN_ALPHA`) over the per-vertex paint — or, with ``black``, a surface that reflects

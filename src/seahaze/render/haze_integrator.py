@@ -228,12 +228,16 @@ def make_integrator(
             sigma = dr.gather(mi.Float, self.sigma_g, j)
             s = -dr.log(dr.maximum(1.0 - u_in * _one_minus_exp(sigma * length), 1e-30)) / sigma
             s = dr.minimum(s, length)
+            return s, self.mixture_density(s, length)
+
+        def mixture_density(self, s: Any, length: Any) -> Any:
+            """The density (1/m) of :meth:`mixture_distance` at distance ``s``."""
             pdf = mi.Float(0.0)
             for k in range(self.n_levels):
                 norm = _one_minus_exp(self.sg[k] * length)
                 density = self.sg[k] * dr.exp(-(self.sg[k] * s)) / dr.maximum(norm, 1e-30)
                 pdf += self.mix_weight[k] * density
-            return s, pdf
+            return pdf
 
         def sun_source(self, d, travel, active):
             """Whether the sun lights the haze from disk direction ``d``, and its

@@ -111,7 +111,7 @@ class LevelRenderer:
             return self.clean, [self.render(s, i, render, haze) for i, s in enumerate(sigmas)]
         if self._physical is None:
             assert self.loaded.spec is not None  # checked in __init__
-            self._physical = PhysicalRenderer(self.loaded, self.loaded.spec)
+            self._physical = PhysicalRenderer(self.loaded, self.loaded.spec, geometry=self.geometry)
         seed = render_seed(render.seed, RenderPass.PHYSICAL_PASS)
         out = self._physical.render(sigmas, haze.albedo, haze.g, render.spp, seed)
         return out.clean, [LevelRender(r) for r in out.levels]

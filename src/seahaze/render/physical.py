@@ -24,9 +24,10 @@ from .diffuse_table import DEFAULT_GRID, TableGrid, build_tables
 from .glint_lobe import GLINT_SHARE
 from .haze_integrator import DEFAULT_BOUNCES, make_integrator
 from .jit_haze import owned_floats
-from .passes import render_radiance
+from .passes import GeometryPass, render_geometry, render_radiance
 from .photon_tracer import SeaReflectance
 from .scene import SEA_SHAPE, LoadedScene, stratified_spp, sunsky_dict
+from .segment_smooth import segments, smooth_within_segments
 
 MIN_TABLE_PHOTONS = 1 << 17
 """Fewest photons per level table (half from the sun, half from the sky)."""
@@ -34,15 +35,19 @@ MAX_TABLE_PHOTONS = 1 << 20
 """Most photons per level table: ~4 s for eleven tables on this project's 2-vCPU machine."""
 SAMPLES_PER_PHOTON = 32
 """Camera samples (pixels × spp) per table photon, before rounding and the bounds above."""
-VESSEL_LIGHT_SHARE = 0.0
-"""The vessel-light pass's samples per pixel as a share of the main pass's; 0 leaves the pass
-out, and that is the default. Measured (docs/physics.md, "Haze in front of a vessel"): at a
-third it takes the vessels' bias from −1.7 % to −0.3 % (and +7.8 % to +1.7 % toward the sun)
-for 2.87× instead of 2.71× Mitsuba's clean pass, but its sparse noise scatters bright
-speckles over the sky around a sunlit white ship at 100 % zoom, which a dataset's images must
-not show; it waits for an estimator that samples the vessels directly."""
-VESSEL_LIGHT_SHARE_MEASURED = 1 / 3
-"""The share the pass was measured at (tests and benchmarks switch it on with this)."""
+VESSEL_LIGHT_SHARE = 1 / 14
+"""The vessel-light pass's samples per pixel as a share of the main pass's, rounded up (0
+leaves the pass out, for comparisons). The pass corrects the haze in front of vessels, which
+the open-sea tables light as if no vessel stood there (shaded hulls toward the sun +7.8 %
+without it; docs/physics.md, "Haze in front of a vessel"). A fourteenth (3 spp for 42 and
+for 32), its probes drawn near and aimed at the vessels and smoothed over
+:data:`VESSEL_LIGHT_RADIUS_PX`, leaves no speckle at 100 % zoom (docs/benchmarks.md, "The
+vessel-light pass's noise"); 4 spp smoothed over 4 pixels looked the same but cost the
+12-image set 3.1× Mitsuba's clean pass, over the 3× it must stay under."""
+VESSEL_LIGHT_RADIUS_PX = 6
+"""Radius (pixels) of the box filter the vessel-light pass is smoothed with, within each
+segment of the image (:mod:`seahaze.render.segment_smooth`): 13 × 13 pixels, its noise
+divided by about 13; its bias is in docs/benchmarks.md, "The vessel-light pass's noise"."""
 MAX_LEVELS_PER_PASS = 12
 """Most levels one pass renders (its kernel's size grows with the count)."""
 FILM_BUDGET_BYTES = 2 << 30
@@ -193,11 +198,14 @@ class PhysicalRenderer:
         bounces: int = DEFAULT_BOUNCES,
         photons: int | None = None,
         glint_share: float = GLINT_SHARE,
+        geometry: GeometryPass | None = None,
     ):
         """``photons``: per level table, or None for :func:`table_photons` of each pass's
         sample count. ``glint_share``: the share of a hull's next directions drawn toward the
         sea's sun glint (:mod:`~seahaze.render.glint_lobe`; 0 for BSDF sampling alone, as
-        benchmarks and tests compare)."""
+        benchmarks and tests compare). ``geometry``: the scene's geometry pass, whose
+        segments (sky, sea, each vessel) bound the vessel-light pass's smoothing (None:
+        traced when that pass first needs it)."""
         mi = _mi()
         self.loaded = loaded
         # The sun and the sky as separate emitters: the sun's single scattering is computed
@@ -213,6 +221,7 @@ class PhysicalRenderer:
             foam_reflectance=loaded.sea_foam_reflectance,
         )
         self._integrators: dict[tuple[int, bool, bool], Any] = {}
+        self._geometry = geometry
         # Every surface but the sea is a vessel (scene.build_scene registers them).
         self.sea_id = next(key for key, kind in loaded.shape_ids.items() if kind == SEA_SHAPE)
 
@@ -279,7 +288,7 @@ class PhysicalRenderer:
             integrator.set_levels(
                 part_sigma, np.full(n, 1.0 / n), albedo, g, part_tables, self.sun_azimuth_rad
             )
-            integrator.vessels.set_sea(self.sea_id)
+            integrator.vessels.set_vessels(self.sea_id, self.loaded.vessel_spheres)
             image = render_radiance(self.loaded, stratified_spp(spp), seed, integrator=integrator)
             if clean is None:
                 clean = image[..., :3].copy()
@@ -308,13 +317,20 @@ class PhysicalRenderer:
         extinction ``sigma`` (L, 3) with their ``tables``: what each level gains from the light
         vessels send into the haze in front of them (:meth:`.VesselLight.vessel_light`;
         negative where a vessel is darker than the open sea and sky it hides), at
-        :func:`vessel_light_spp` of ``spp``."""
+        :func:`vessel_light_spp` of ``spp``, smoothed within the image's segments (sky, sea,
+        each vessel) over :data:`VESSEL_LIGHT_RADIUS_PX`."""
         integrator = self._integrator(n, grey, vessels_only=True)
         integrator.set_levels(sigma, np.full(n, 1.0 / n), albedo, g, tables, self.sun_azimuth_rad)
-        integrator.vessels.set_sea(self.sea_id)
+        integrator.vessels.set_vessels(self.sea_id, self.loaded.vessel_spheres)
         pass_seed = render_seed(seed, RenderPass.VESSEL_LIGHT)
         samples = vessel_light_spp(spp)
-        return render_radiance(self.loaded, samples, pass_seed, integrator=integrator, clip=False)
+        image = render_radiance(self.loaded, samples, pass_seed, integrator=integrator, clip=False)
+        if self._geometry is None:
+            self._geometry = render_geometry(self.loaded)
+        labels = segments(self._geometry.instance, self._geometry.distance_m)
+        # The clean channels (the first three) are 0 in this pass: only the levels' smoothed.
+        image[..., 3:] = smooth_within_segments(image[..., 3:], labels, VESSEL_LIGHT_RADIUS_PX)
+        return image
 
     def _integrator(self, n_levels: int, grey: bool, vessels_only: bool = False) -> Any:
         key = (n_levels, grey, vessels_only)
@@ -336,9 +352,9 @@ class PhysicalRenderer:
 
 def vessel_light_spp(spp: int) -> int:
     """Samples per pixel of the vessel-light pass for ``spp`` of the main pass: the share
-    :data:`VESSEL_LIGHT_SHARE` of them, at least one, as the ``multijitter`` sampler takes
-    them (a share of 0 leaves the pass out, for comparisons)."""
-    return stratified_spp(max(1, round(spp * VESSEL_LIGHT_SHARE)))
+    :data:`VESSEL_LIGHT_SHARE` of them, rounded up, as the ``multijitter`` sampler takes them
+    (a share of 0 leaves the pass out, for comparisons)."""
+    return stratified_spp(max(1, math.ceil(spp * VESSEL_LIGHT_SHARE - 1e-9)))
 
 
 def levels_per_pass(width: int, height: int, n_levels: int) -> int:

@@ -42,7 +42,7 @@ from ..world import (
     SceneGeometry,
     sun_direction,
 )
-from .fleet import PAINT_ATTRIBUTE, fleet_meshes, loaded_vessel_bsdfs
+from .fleet import PAINT_ATTRIBUTE, fleet_meshes, loaded_vessel_bsdfs, vessel_spheres
 
 SEA_SHAPE = -1
 """:attr:`LoadedScene.shape_ids` value of the sea mesh."""
@@ -237,6 +237,8 @@ class LoadedScene:
     """Shape registry id of each vessel mesh → the vessel index of every face (-1: none)."""
     n_vessels: int = 0
     """Vessels in the scene (indices 0 … n_vessels − 1)."""
+    vessel_spheres: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
+    """A sphere around every vessel, (n_vessels, 4): centre x, y, z and radius (m)."""
     clean_scene: Any = None
     """The same surfaces, sun and sky without the haze box, for the clean pass (None: ``scene``
     has no box and serves)."""
@@ -382,6 +384,7 @@ def build_scene(
         spec,
         vessel_faces=vessel_faces,
         n_vessels=len(geometry.vessels),
+        vessel_spheres=vessel_spheres(fleet, len(geometry.vessels)),
         sea_roughness=geometry.sea_roughness,
         sea_foam_coverage=geometry.sea_foam_coverage,
         clean_scene=clean_scene,

@@ -9,8 +9,12 @@ effect of remote sensing, where the light of neighbouring ground is scattered in
 sight (Tanré, Herman & Deschamps 1981, *Applied Optics* 20, 3676).
 
 :class:`VesselLight` is the correction, a helper the haze integrator
-(:mod:`seahaze.render.haze_integrator`) holds and renders as a pass of its own; the estimator,
-what it leaves out and why a separate pass are in docs/physics.md, "Haze in front of a vessel".
+(:mod:`seahaze.render.haze_integrator`) holds and renders as a pass of its own. Its probes are
+drawn near the vessels and aimed at them (each strategy mixed with the plain one by the balance
+heuristic), because most probes from the phase function alone miss every vessel and the few
+that meet a sunlit hull speckle the sky; :mod:`seahaze.render.physical` then smooths the pass
+within each segment of the image (:mod:`seahaze.render.segment_smooth`). The estimator, what
+it leaves out and why a separate pass are in docs/physics.md, "Haze in front of a vessel".
 Units: metres, radiance in the scene's units, extinction in 1/m.
 """
 
@@ -18,8 +22,17 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from . import jit_haze
 from .haze_path import HazePath
+
+NEAR_SHARE = 0.5
+"""The share of probe points drawn near a vessel (the rest from the levels' mixture;
+:meth:`VesselLight.probe_point`)."""
+AIM_SHARE = 0.5
+"""The share of probes aimed at a vessel's bounding sphere (the rest follow the phase
+function; :meth:`VesselLight.probe_direction`)."""
 
 
 class VesselLight:
@@ -29,16 +42,23 @@ class VesselLight:
 
     def __init__(self, haze: Any):
         self.haze = haze
-        self.set_sea(0)
+        self.set_vessels(0, np.zeros((0, 4)))
 
-    def set_sea(self, sea_id: int) -> None:
-        """The registry id of the scene's sea shape: every other surface is a vessel, whose
-        light the haze in front of it scatters (:meth:`vessel_light`). A kernel parameter,
-        so another scene reuses the compiled kernel."""
+    def set_vessels(self, sea_id: int, spheres: np.ndarray) -> None:
+        """The registry id of the scene's sea shape (every other surface is a vessel, whose
+        light the haze in front of it scatters: :meth:`vessel_light`) and a sphere around
+        every vessel, (n, 4) centre x, y, z and radius in metres, at which probes are aimed.
+        Kernel parameters, so another scene (another fleet) reuses the compiled kernel."""
         import drjit as dr
         import mitsuba as mi
 
         self.sea_id = dr.opaque(mi.UInt32, int(sea_id))
+        rows = np.asarray(spheres, np.float64).reshape(-1, 4)
+        self.count = dr.opaque(mi.UInt32, len(rows))
+        # At least two rows (a one-element array would be a scalar, another kernel).
+        padded = np.concatenate([rows, np.zeros((2, 4))])
+        self.centre = [jit_haze.owned_floats(padded[:, axis]) for axis in range(3)]
+        self.radius = jit_haze.owned_floats(padded[:, 3])
 
     def sample(self, scene, sampler, ray, active):
         """The correction pass: :meth:`vessel_light` along the camera segment, for every
@@ -58,52 +78,56 @@ class VesselLight:
         """Correct the camera segment's diffuse in-scattering for the vessels: the tables'
         field is that of the open sea, but haze in front of a vessel sees the vessel.
 
-        One point ``x`` on the segment (from the levels' mixture) and one direction from
-        the phase function around the ray; where that direction meets a vessel, two short
+        One point ``x`` on the segment (:meth:`probe_point`) and one direction from it
+        (:meth:`probe_direction`); where that direction meets a vessel, two short
         paths leave the hit: one shading the vessel (the light that really arrives at
         ``x``), and one going on through the vessel as if it were not there, to the sea or
         the sky of the open-sea field (the light the table assumed; not the sun's disk,
         whose single scattering is computed with shadow rays). Each level gains the
-        difference, weighted by its scattering at ``x``. With a forward-peaked phase
-        function most of the light scattered toward the camera just in front of a vessel
-        came from the vessel: a shaded hull against the bright haze toward the sun is
-        darker than the open-sea field makes it (docs/physics.md, "Haze in front of a
-        vessel"; one probe per sample: two on fewer samples cost more for the same noise)."""
+        difference, weighted by its scattering at ``x`` and the phase function over the
+        probe's density. With a forward-peaked phase function most of the light scattered
+        toward the camera just in front of a vessel came from the vessel: a shaded hull
+        against the bright haze toward the sun is darker than the open-sea field makes it
+        (docs/physics.md, "Haze in front of a vessel")."""
         import drjit as dr
         import mitsuba as mi
 
         haze = self.haze
-        s, pdf = haze.mixture_distance(sampler.next_1d(active), length)
-        cos_t = jit_haze.hg_sample_cos(sampler.next_1d(active), haze.g)
-        phi = 2.0 * dr.pi * sampler.next_1d(active)
-        axis = (ray.d.x, ray.d.y, ray.d.z)
-        d = mi.Vector3f(*jit_haze.rotate_directions(axis, cos_t, phi))
-        probe = mi.Ray3f(ray(enter + s), d, ray.time, ray.wavelengths)
+        s, pdf = self.probe_point(ray, enter, length, sampler, active)
+        x = ray(enter + s)
+        d, phase_weight = self.probe_direction(x, ray.d, sampler, active)
+        probe = mi.Ray3f(x, d, ray.time, ray.wavelengths)
         si = scene.ray_intersect(probe, active)
         on_vessel = active & self.is_vessel(si)
         _, to_vessel = haze.slab_length(probe.o, d, si.t)
-        scale = haze.albedo / dr.maximum(pdf, 1e-30)
+        scale = haze.albedo * phase_weight / dr.maximum(pdf, 1e-30)
         start = [
             dr.select(on_vessel, haze.ext[k] * haze.transmittance(k, s + to_vessel), 0.0) * scale
             for k in range(haze.n_levels)
         ]
 
-        # Once, and only for packets where a lane met a vessel (few do): a loop that a
-        # packet with no active lane skips, where a masked block costs every lane.
+        # Once, and only for packets where a lane met a vessel: a loop that a packet with
+        # no active lane skips, where a masked block costs every lane.
         def body(res, pending, sampler):
             seen = HazePath.start(probe, pending, haze.n_levels, haze.grey)
             seen.att, seen.depth = list(start), mi.UInt32(1)
             haze.shade(scene, sampler, seen, si)
             seen.depth += 1
-            seen = haze.follow(scene, sampler, seen)
             end, beyond = self.past_vessels(scene, si, d, pending)
             assumed = HazePath.start(mi.Ray3f(si.p, d), pending, haze.n_levels, haze.grey)
             assumed.att, assumed.depth = list(start), mi.UInt32(1)
             haze.bounce(scene, sampler, assumed, camera=False, hit=(end, beyond), free=True)
-            assumed = haze.follow(scene, sampler, assumed)
+            # Only one of the two paths goes on past its first vertex, each with probability
+            # ½ and twice the weight (unbiased): following them is most of the pass's time,
+            # and a packet runs the loop while any of its lanes goes on.
+            go_seen = sampler.next_1d(pending) < 0.5
+            onward = dr.select(go_seen, seen, assumed)
+            onward.res = [dr.zeros(mi.Color3f) for _ in range(haze.n_levels)]
+            onward = haze.follow(scene, sampler, onward)
+            sign = dr.select(go_seen, 2.0, -2.0)
             res = [
-                r + dr.select(pending, a - b, 0.0)
-                for r, a, b in zip(res, seen.res, assumed.res, strict=True)
+                r + dr.select(pending, a - b + sign * o, 0.0)
+                for r, a, b, o in zip(res, seen.res, assumed.res, onward.res, strict=True)
             ]
             return res, mi.Bool(False), sampler
 
@@ -113,6 +137,163 @@ class VesselLight:
             body,
             label="vessel_light",
         )
+
+    def probe_point(self, ray, enter, length, sampler, active):
+        """A distance ``s`` along the camera segment (from ``enter``, ``length`` long) and
+        its density (1/m).
+
+        Two strategies, one drawn per sample and weighted by the balance heuristic
+        (one-sample MIS, Veach & Guibas 1995): the levels' mixture (``mixture_distance``,
+        where the haze scatters), and a Cauchy density centred where the ray passes closest
+        to one vessel, its width the larger of that distance and the vessel's radius
+        (equiangular sampling, Kulla & Fajardo 2012, widened to the vessel's size): the
+        haze close in front of a vessel, which sees it large, is where its light is
+        scattered toward the camera. The vessel is drawn in proportion to
+        :meth:`along_ray`'s weight."""
+        import drjit as dr
+
+        haze = self.haze
+        u = sampler.next_1d(active)
+        if NEAR_SHARE <= 0.0:  # the mixture alone: no loop over the vessels
+            return haze.mixture_distance(u, length)
+        total, chosen, u = self.draw(lambda i: self.along_ray(i, ray, enter, length)[3], u, active)
+        near_share = dr.select(total > 0.0, NEAR_SHARE, 0.0)
+        near = u < near_share
+        u = dr.select(near, u / near_share, (u - near_share) / (1.0 - near_share))
+        u = dr.clip(u, 0.0, 0.99999994)
+        s_mix, _ = haze.mixture_distance(u, length)
+        closest, width, angles, _ = self.along_ray(chosen, ray, enter, length)
+        s_near = closest + width * dr.tan(angles[0] + u * (angles[1] - angles[0]))
+        s = dr.clip(dr.select(near, s_near, s_mix), 0.0, length)
+
+        def near_density(i):
+            closest, width, angles, w = self.along_ray(i, ray, enter, length)
+            span = dr.maximum(angles[1] - angles[0], 1e-30)
+            return w * width / (span * (width * width + dr.square(s - closest)))
+
+        near_pdf = self.total(near_density, active) / dr.maximum(total, 1e-30)
+        return s, (1.0 - near_share) * haze.mixture_density(s, length) + near_share * near_pdf
+
+    def along_ray(self, i, ray, enter, length):
+        """Vessel ``i`` seen along the camera segment: the distance from the segment's start
+        where the ray passes closest to its centre, the Cauchy width (m; that closest
+        distance or its radius, the larger), the angles (rad) of the segment's ends seen
+        from the centre, and its weight for :meth:`probe_point`: the angle the segment
+        spans (over π) times the square of radius over closest distance (1 where the ray
+        goes through the sphere)."""
+        import drjit as dr
+        import mitsuba as mi
+
+        centre = mi.Point3f(*(dr.gather(mi.Float, c, i) for c in self.centre))
+        radius = dr.gather(mi.Float, self.radius, i)
+        to = centre - ray(enter)
+        closest = dr.dot(to, ray.d)
+        miss = dr.sqrt(dr.maximum(dr.squared_norm(to) - closest * closest, 0.0))
+        width = dr.maximum(dr.maximum(miss, radius), 1e-3)
+        angles = (dr.atan(-closest / width), dr.atan((length - closest) / width))
+        reach = dr.square(radius / width)
+        w = (angles[1] - angles[0]) / dr.pi * reach
+        return closest, width, angles, dr.select(radius > 0.0, w, 0.0)
+
+    def probe_direction(self, x, ray_d, sampler, active):
+        """A probe direction from ``x`` and the phase function toward the camera over its
+        density (``f(ω)/p(ω)``, 1/sr over 1/sr).
+
+        Two strategies, one drawn per sample and weighted by the balance heuristic: the
+        phase function around the ray ``ray_d``, and a direction uniform in the cone of one
+        vessel's bounding sphere, drawn in proportion to :meth:`cone`'s weight."""
+        import drjit as dr
+        import mitsuba as mi
+
+        g = self.haze.g
+        u_pick = sampler.next_1d(active)
+        u = sampler.next_2d(active)
+        cos_hg = jit_haze.hg_sample_cos(u.x, g)
+        around = (ray_d.x, ray_d.y, ray_d.z)
+        phased = mi.Vector3f(*jit_haze.rotate_directions(around, cos_hg, 2.0 * dr.pi * u.y))
+        if AIM_SHARE <= 0.0:  # the phase function alone: its own density, no loop
+            return phased, mi.Float(1.0)
+        total, chosen, u_pick = self.draw(lambda i: self.cone(i, x, ray_d)[2], u_pick, active)
+        aim_share = dr.select(total > 0.0, AIM_SHARE, 0.0)
+        aimed = u_pick < aim_share
+        axis, one_minus, _ = self.cone(chosen, x, ray_d)
+        m = u.x * one_minus
+        sin_t = dr.sqrt(dr.maximum(m * (2.0 - m), 0.0))
+        sin_p, cos_p = dr.sincos(2.0 * dr.pi * u.y)
+        toward = mi.Frame3f(axis).to_world(mi.Vector3f(sin_t * cos_p, sin_t * sin_p, 1.0 - m))
+        d = dr.select(aimed, toward, phased)
+        phase = jit_haze.hg_phase(dr.dot(d, ray_d), g)
+
+        def aimed_density(i):
+            axis, one_minus, w = self.cone(i, x, ray_d)
+            # 1 − cos between d and the axis as half the squared chord: exact for small cones.
+            within = 0.5 * dr.squared_norm(d - axis) <= one_minus
+            return dr.select(within, w / (2.0 * dr.pi * one_minus), 0.0)
+
+        aim_pdf = self.total(aimed_density, active) / dr.maximum(total, 1e-30)
+        density = (1.0 - aim_share) * phase + aim_share * aim_pdf
+        return d, phase / dr.maximum(density, 1e-30)
+
+    def cone(self, i, x, ray_d):
+        """Vessel ``i``'s bounding sphere seen from ``x``: the unit direction to its centre,
+        ``1 − cos`` of the cone's half-angle (2 from inside the sphere: every direction), and
+        its weight for :meth:`probe_direction`, solid angle (sr) times the phase function
+        (1/sr) at the cone's edge nearest the camera ray ``ray_d`` (its axis, where the ray is
+        inside the cone)."""
+        import drjit as dr
+        import mitsuba as mi
+
+        centre = mi.Point3f(*(dr.gather(mi.Float, c, i) for c in self.centre))
+        radius = dr.gather(mi.Float, self.radius, i)
+        to = centre - x
+        dist2 = dr.maximum(dr.squared_norm(to), 1e-12)
+        axis = to * dr.rsqrt(dist2)
+        sin2 = radius * radius / dist2
+        inside = sin2 >= 1.0
+        cos_a = dr.sqrt(dr.maximum(1.0 - sin2, 0.0))
+        # 1 − cos α as sin²α / (1 + cos α): no float32 cancellation for a distant hull.
+        one_minus = dr.select(inside, 2.0, sin2 / (1.0 + cos_a))
+        cos_t = dr.dot(axis, ray_d)
+        sin_t = dr.sqrt(dr.maximum(1.0 - cos_t * cos_t, 0.0))
+        sin_a = dr.sqrt(dr.minimum(sin2, 1.0))
+        edge = dr.select(inside | (cos_t >= cos_a), 1.0, cos_t * cos_a + sin_t * sin_a)
+        weight = 2.0 * dr.pi * one_minus * jit_haze.hg_phase(edge, self.haze.g)
+        return axis, one_minus, dr.select(radius > 0.0, weight, 0.0)
+
+    def draw(self, weigh, u, active):
+        """The total of ``weigh(i)`` over the vessels, one vessel drawn in proportion to it,
+        and ``u`` rescaled to [0, 1). One pass: each vessel replaces the choice with its
+        share of the weight so far, and ``u`` is rescaled within the branch it took, so one
+        number serves the draw and the next decision."""
+        import drjit as dr
+        import mitsuba as mi
+
+        def body(i, total, chosen, u):
+            w = weigh(i)
+            total = total + w
+            share = dr.select(total > 0.0, w / total, 0.0)
+            take = u < share
+            chosen = dr.select(take, i, chosen)
+            u = dr.select(take, u / share, (u - share) / dr.maximum(1.0 - share, 1e-30))
+            return i + 1, total, chosen, dr.clip(u, 0.0, 0.99999994)
+
+        start = (mi.UInt32(0), mi.Float(0.0), mi.UInt32(0), mi.Float(u))
+        _, total, chosen, u = dr.while_loop(
+            start, lambda i, total, chosen, u: active & (i < self.count), body
+        )
+        return total, chosen, u
+
+    def total(self, term, active):
+        """The sum of ``term(i)`` over the vessels."""
+        import drjit as dr
+        import mitsuba as mi
+
+        _, total = dr.while_loop(
+            (mi.UInt32(0), mi.Float(0.0)),
+            lambda i, total: active & (i < self.count),
+            lambda i, total: (i + 1, total + term(i)),
+        )
+        return total
 
     def is_vessel(self, si):
         """Whether ``si`` lies on a vessel (a valid hit that is not the sea)."""
