@@ -51,14 +51,14 @@ CONFIRM_MEMORY_FRACTION = 0.8
 """A scene estimated to need more than this share of the machine's memory needs ``--yes``."""
 
 # measured by scripts/measure_cost_model.py (docs/benchmarks.md, "Cost model"); CPU seconds
-SETUP_CORE_S = {"low": 1.17, "medium": 1.17, "high": 2.46}
-CLEAN_CORE_S = 3.98e-07
-WRITE_CORE_S = 4.52e-07
-PHYSICAL_PASS_CORE_S = 6.09e-07
-PHYSICAL_LEVEL_CORE_S = 1.45e-08
-PHYSICAL_TABLE_S = {50.0: 0.28, 300.0: 0.14, 4000.0: 0.12}
-REFERENCE_CORE_S = {50.0: 5.98e-06, 300.0: 4.1e-06, 4000.0: 1.95e-06}
-ASM_LEVEL_S = {50.0: 0.73, 300.0: 0.6, 4000.0: 0.47}
+SETUP_CORE_S = {"low": 1.07, "medium": 1.21, "high": 2.44}
+CLEAN_CORE_S = 4.21e-07
+WRITE_CORE_S = 4.54e-07
+PHYSICAL_PASS_CORE_S = 6.88e-07
+PHYSICAL_LEVEL_CORE_S = 1.11e-08
+PHYSICAL_TABLE_S = {50.0: 0.28, 300.0: 0.14, 4000.0: 0.07}
+REFERENCE_CORE_S = {50.0: 6.18e-06, 300.0: 4.21e-06, 4000.0: 2.03e-06}
+ASM_LEVEL_S = {50.0: 0.81, 300.0: 0.64, 4000.0: 0.51}
 
 VALIDATED_FROM_M = {"physical": 100.0}
 """Thinnest visibility (m) down to which the mode is within 3 % of converged ``reference``
