@@ -27,6 +27,10 @@ def test_layout_is_complete(dataset):
     assert (dataset / "depth" / "default.exr").exists()
     meta = json.loads((dataset / "meta" / "default.json").read_text())
     assert [lv["name"] for lv in meta["levels"]] == LEVELS
+    # The fixture renders 2 spp: the vessel-light pass takes a fourteenth, rounded up, so 1.
+    render = meta["render"]
+    assert render["spp"] == 2 and render["sampler"] == "multijitter"
+    assert render["vessel_light"] == {"spp": 1, "smoothing_radius_px": 6}
 
 
 def test_labels_are_identical_at_every_level(dataset):

@@ -385,9 +385,15 @@ def _assemble(
 
 
 def render_meta(spec: SceneSpec) -> dict[str, Any]:
-    """``meta``'s ``render`` entry: the samples actually taken and what the denoiser did."""
+    """``meta``'s ``render`` entry: the samples actually taken, the ``physical`` mode's
+    vessel-light pass (its samples per pixel and smoothing radius) and what the denoiser did."""
     from . import denoise
-    from .physical import stratified_spp
+    from .physical import (
+        VESSEL_LIGHT_RADIUS_PX,
+        VESSEL_LIGHT_SHARE,
+        stratified_spp,
+        vessel_light_spp,
+    )
 
     physical = spec.render.mode == "physical"
     entry: dict[str, Any] = {
@@ -396,6 +402,11 @@ def render_meta(spec: SceneSpec) -> dict[str, Any]:
         "sampler": PHYSICAL_SAMPLER if physical else "independent",
         "denoise": spec.render.denoise,
     }
+    if physical and VESSEL_LIGHT_SHARE > 0.0:
+        entry["vessel_light"] = {
+            "spp": vessel_light_spp(spec.render.spp),
+            "smoothing_radius_px": VESSEL_LIGHT_RADIUS_PX,
+        }
     if spec.render.denoise == "on":
         entry["denoiser"] = {
             "library": "Intel Open Image Denoise (pyoidn)",
