@@ -40,6 +40,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_gt_noise import TABLE_SEED, _session  # noqa: E402
+from bench_modes import region_masks  # noqa: E402
 from bench_passes import replace_section  # noqa: E402
 
 FIGURE = ROOT / "docs" / "images" / "vessel_light_speckle.png"
@@ -90,11 +91,7 @@ class Bench:
         run = renderer.render([self.sigma_rgb], haze.albedo, haze.g, spp, 1)
         self.main = run.levels[0]
         geo = self.session.pixels
-        self.regions = {
-            "sky": (geo.instance < 0) & np.isinf(geo.distance_m),
-            "sea": (geo.instance < 0) & np.isfinite(geo.distance_m),
-            "vessels": geo.instance >= 0,
-        }
+        self.regions = region_masks(geo.distance_m, geo.instance)
 
     def renderer(self, near: float, aim: float) -> Any:
         """A fresh renderer (its kernel traced with these shares)."""
@@ -149,6 +146,8 @@ def smoothing_bias(bench: Bench, bias_spp: int) -> dict[str, dict[int, float]]:
 
 
 def main() -> None:
+    from seahaze.render import physical
+
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--res", default="1280x720")
     parser.add_argument("--spp", type=int, default=42)
@@ -160,11 +159,9 @@ def main() -> None:
     crop = crop_of(bench.session)
     in_crop = np.zeros_like(bench.regions["sky"])
     in_crop[crop] = True
-    open_haze = ~bench.regions["vessels"]
+    open_haze = ~bench.regions["vessel"]
     rows, tiles = [], [("without the pass", bench.main)]
     for label, pass_spp, near, aim, radius in SETTINGS:
-        from seahaze.render import physical
-
         share = pass_spp / args.spp
         renderer = bench.renderer(near, aim)
         bench.correction(renderer, share, radius, 3)  # compile

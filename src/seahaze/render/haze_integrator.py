@@ -134,7 +134,8 @@ def make_integrator(
             # Where the sea's sun glint lies seen from a hull (glint_lobe module).
             self.glint = glint_lobe.GlintLobe(sun_axis(sun), wind_speed, glint_share)
             self.top, self.bottom = top_m, HAZE_BOTTOM_M
-            self.vessels = VesselLight(self)
+            # The vessel-light pass's helper, in that pass's integrator only.
+            self.vessels = VesselLight(self) if vessels_only else None
             self.set_levels(
                 np.full((n_levels, 3), 1e-3),
                 np.full(n_levels, 1.0 / n_levels),

@@ -288,7 +288,6 @@ class PhysicalRenderer:
             integrator.set_levels(
                 part_sigma, np.full(n, 1.0 / n), albedo, g, part_tables, self.sun_azimuth_rad
             )
-            integrator.vessels.set_vessels(self.sea_id, self.loaded.vessel_spheres)
             image = render_radiance(self.loaded, stratified_spp(spp), seed, integrator=integrator)
             if clean is None:
                 clean = image[..., :3].copy()
