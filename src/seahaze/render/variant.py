@@ -60,11 +60,40 @@ class VariantError(RuntimeError):
     """The requested Mitsuba variant cannot run on this machine."""
 
 
+_CUDA_DIRS = (
+    "/usr/lib/x86_64-linux-gnu",
+    "/usr/lib/aarch64-linux-gnu",
+    "/usr/lib64",
+    "/usr/local/nvidia/lib64",
+    "/usr/lib/wsl/lib",
+)
+"""Where NVIDIA's driver library ``libcuda`` usually lies when the dynamic loader's own search
+(``ld.so.cache``, ``LD_LIBRARY_PATH``) does not know it (GPU containers mount it under
+``/usr/local/nvidia``)."""
+
+
+def _libcuda_loadable() -> bool:
+    """Whether the driver library loads: as the dynamic loader finds it, else from
+    :data:`_CUDA_DIRS`."""
+    import ctypes
+
+    candidates = ["libcuda.so.1", "libcuda.so"]
+    for folder in _CUDA_DIRS:
+        candidates += sorted(glob.glob(os.path.join(folder, "libcuda.so*")))
+    for name in candidates:
+        try:
+            ctypes.CDLL(name)
+        except OSError:
+            continue
+        return True
+    return False
+
+
 def _cuda_usable() -> bool:
-    """True where an NVIDIA driver is present; checked before touching the CUDA backend."""
-    return any(Path(p).exists() for p in ("/dev/nvidia0", "/dev/nvidiactl")) and bool(
-        glob.glob("/usr/lib/x86_64-linux-gnu/libcuda.so*") + glob.glob("/usr/lib64/libcuda.so*")
-    )
+    """True where an NVIDIA driver is present (a device node and a loadable ``libcuda``);
+    checked before touching the CUDA backend."""
+    devices = any(Path(p).exists() for p in ("/dev/nvidia0", "/dev/nvidiactl"))
+    return devices and _libcuda_loadable()
 
 
 def _try_set(name: str) -> bool:
