@@ -5,7 +5,7 @@ samples find only now and then (``scripts/measure_gt_variance.py``: ~8 % rms on 
 ``physical`` integrator draws a share of a hull's continuation directions from a lobe around the
 sun's mirror image in the sea (:meth:`seahaze.render.glint_lobe.GlintLobe.continue_path`).
 This script renders the default scene's clean image with that share at 0 (BSDF sampling alone,
-the renderer before it) and at :data:`~seahaze.render.glint_lobe.GLINT_SHARE`, each at two
+the renderer before it) and at the default ``EstimatorSettings.glint_share``, each at two
 sampler seeds, and reports per region (sky, sea, each vessel class) the rms per-pixel noise of
 the luminance relative to the region's mean (``√(½ mean (a − b)²)``, no converged render
 needed), the PSNR of the 8-bit image's noise, and the pass's time (the second seed's, warm). It
@@ -45,9 +45,11 @@ CROP = (48, 120)
 def clean_pair(session: Any, spec: Any, share: float, spp: int) -> tuple[list[np.ndarray], float]:
     """The clean image at two sampler seeds with glint share ``share``, and the second pass's
     time (s)."""
+    from seahaze.render.estimator import EstimatorSettings
     from seahaze.render.physical import PhysicalRenderer
 
-    renderer = PhysicalRenderer(session.loaded, spec, glint_share=share)
+    settings = EstimatorSettings(glint_share=share)
+    renderer = PhysicalRenderer(session.loaded, spec, settings)
     images, seconds = [], 0.0
     for seed in (SEED, SEED + 1):
         start = time.perf_counter()
@@ -105,7 +107,8 @@ def write_figure(tiles: list[tuple[str, np.ndarray]], session: Any, exposure: fl
 
 def main() -> None:
     from seahaze import imaging
-    from seahaze.render.glint_lobe import GLINT_SHARE, lobe_kappa
+    from seahaze.render.estimator import DEFAULT_SETTINGS
+    from seahaze.render.glint_lobe import lobe_kappa
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--res", default="1280x720", type=_res)
@@ -116,7 +119,7 @@ def main() -> None:
     geo = session.pixels
     settings = [
         ("BSDF sampling alone (before)", 0.0),
-        (f"glint lobe, share {GLINT_SHARE}", GLINT_SHARE),
+        (f"glint lobe, share {DEFAULT_SETTINGS.glint_share}", DEFAULT_SETTINGS.glint_share),
     ]
     runs = [(label, *clean_pair(session, spec, share, args.spp)) for label, share in settings]
     exposure = imaging.auto_exposure(runs[0][1][0], geo.distance_m, geo.elevation_deg())

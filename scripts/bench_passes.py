@@ -35,6 +35,7 @@ def proc_status_mib(field: str = "VmRSS") -> float:
 
 def run_pass(name: str, res: tuple[int, int], spp: int, vis: float) -> dict:
     """Run one pass in this process and return its timings and memory."""
+    from seahaze.medium import haze_medium
     from seahaze.render import passes
     from seahaze.render.engine import open_session
     from seahaze.sceneio import load_scene
@@ -65,7 +66,7 @@ def run_pass(name: str, res: tuple[int, int], spp: int, vis: float) -> dict:
             air = passes.render_airlight(
                 loaded, sigma, haze.albedo, haze.g, spec.render.airlight_spp, run, 0
             )
-            passes.asm_level(clean, geo, sigma, air.rgb, haze.top_m)
+            passes.asm_level(clean, geo, sigma, air.rgb, haze_medium(haze))
 
     times = []
     for run in range(2):

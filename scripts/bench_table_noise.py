@@ -44,6 +44,7 @@ def measure(photons: int, seeds: int, spp: int) -> dict:
     standard error of each region mean (levels × regions) and the tables' time."""
     from seahaze.imaging import luminance
     from seahaze.render.engine import open_session
+    from seahaze.render.estimator import EstimatorSettings
     from seahaze.render.physical import PhysicalRenderer
     from seahaze.sceneio import load_scene
     from seahaze.spec import with_overrides
@@ -56,7 +57,7 @@ def measure(photons: int, seeds: int, spp: int) -> dict:
     masks = region_masks(session.pixels.distance_m, session.pixels.instance)
     haze = spec.haze
     sigmas = [channel_extinction(v, haze.threshold, haze.extinction_spectrum) for v in LEVELS]
-    renderer = PhysicalRenderer(session.loaded, spec, photons=photons)
+    renderer = PhysicalRenderer(session.loaded, spec, EstimatorSettings(table_photons=photons))
     keys = [f"v{int(v):04d}" for v in LEVELS]
     refs = [luminance(rgb[k]) for k in keys]
     bias = np.empty((seeds, len(LEVELS), len(REGIONS)))

@@ -28,6 +28,7 @@ Usage: python scripts/bench_vessel_light.py [--res 1280x720] [--spp 42] [--vis 4
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import platform
 import sys
@@ -74,7 +75,6 @@ class Bench:
     """The default scene at one level, its main pass and its fixed diffuse table."""
 
     def __init__(self, res: tuple[int, int], spp: int, vis: float):
-        from seahaze.render import physical
         from seahaze.visibility import channel_extinction
 
         self.spec, self.session = _session(res)
@@ -82,34 +82,32 @@ class Bench:
         self.sigma_rgb = channel_extinction(vis, haze.threshold, haze.extinction_spectrum)
         self.sigma = np.broadcast_to(self.sigma_rgb, (1, 3)).astype(float)
         self.grey = bool(np.all(self.sigma == self.sigma[:, 1:2]))
-        renderer = self.renderer(0.0, 0.0)
-        self.tables = renderer.tables(
-            self.sigma, haze.albedo, haze.g, TABLE_SEED, physical.MIN_TABLE_PHOTONS
-        )
+        renderer = self.renderer(0.0, 0.0, vessel_light_share=0.0)
+        photons = renderer.settings.min_table_photons
+        self.tables = renderer.tables(self.sigma, haze.albedo, haze.g, TABLE_SEED, photons)
         renderer.tables = lambda *a, **k: self.tables  # type: ignore[method-assign]
-        physical.VESSEL_LIGHT_SHARE = 0.0
         run = renderer.render([self.sigma_rgb], haze.albedo, haze.g, spp, 1)
         self.main = run.levels[0]
         geo = self.session.pixels
         self.regions = region_masks(geo.distance_m, geo.instance)
 
-    def renderer(self, near: float, aim: float) -> Any:
-        """A fresh renderer (its kernel traced with these shares)."""
-        from seahaze.render import vessel_light
+    def renderer(self, near: float, aim: float, **settings: Any) -> Any:
+        """A fresh renderer whose vessel-light probes are drawn near (``near``) and aimed at
+        (``aim``) the vessels in these shares, with further estimator ``settings``."""
+        from seahaze.render.estimator import EstimatorSettings
         from seahaze.render.physical import PhysicalRenderer
 
-        vessel_light.NEAR_SHARE, vessel_light.AIM_SHARE = near, aim
-        return PhysicalRenderer(self.session.loaded, self.spec, geometry=self.session.pixels)
+        chosen = EstimatorSettings(near_share=near, aim_share=aim, **settings)
+        return PhysicalRenderer(self.session.loaded, self.spec, chosen, self.session.pixels)
 
     def correction(self, renderer: Any, share: float, radius: int, seed: int) -> np.ndarray:
-        """The pass's (H, W, 3) correction of the level, at ``share`` of the spp."""
-        from seahaze.render import physical
-
-        physical.VESSEL_LIGHT_SHARE, physical.VESSEL_LIGHT_RADIUS_PX = share, radius
-        haze = self.spec.haze
-        image = renderer._vessel_light(
-            1, self.grey, self.sigma, haze.albedo, haze.g, self.tables, self.spp, seed
+        """The pass's (H, W, 3) correction of the level, at ``share`` of the spp, smoothed
+        over ``radius`` pixels."""
+        renderer.settings = dataclasses.replace(
+            renderer.settings, vessel_light_share=share, vessel_light_radius_px=radius
         )
+        haze = self.spec.haze
+        image = renderer.vessel_light(self.sigma, haze.albedo, haze.g, self.tables, self.spp, seed)
         return image[..., 3:6]
 
 

@@ -23,6 +23,7 @@ Usage: python scripts/compare_components.py V [--batches 8] [--g 0.75] [--sun 1]
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -79,15 +80,13 @@ def main() -> None:
     args = parser.parse_args()
 
     from seahaze.imaging import luminance
-    from seahaze.render import physical
     from seahaze.render.engine import open_session
-    from seahaze.render.physical import MAX_TABLE_PHOTONS, PhysicalRenderer
+    from seahaze.render.estimator import EstimatorSettings
+    from seahaze.render.physical import PhysicalRenderer
     from seahaze.sceneio import load_scene
     from seahaze.spec import with_changes, with_overrides
     from seahaze.visibility import channel_extinction
 
-    if args.vessel_light is not None:
-        physical.VESSEL_LIGHT_SHARE = args.vessel_light
     base, _ = load_scene(SCENE)
     changes: dict = {"sun": {"scale": args.sun}, "sky": {"scale": args.sky}}
     if args.g is not None:
@@ -115,7 +114,11 @@ def main() -> None:
 
     spec = with_overrides(base, mode="physical", levels=[v])
     session = open_session(spec)
-    renderer = PhysicalRenderer(session.loaded, spec, photons=MAX_TABLE_PHOTONS)
+    settings = EstimatorSettings()
+    if args.vessel_light is not None:
+        settings = EstimatorSettings(vessel_light_share=args.vessel_light)
+    settings = dataclasses.replace(settings, table_photons=settings.max_table_photons)
+    renderer = PhysicalRenderer(session.loaded, spec, settings)
     runs = [renderer.render([sigma], haze.albedo, haze.g, 256, seed) for seed in range(1, 5)]
     phys = np.mean([luminance(r.levels[0]) for r in runs], 0)
     clean = np.mean([luminance(r.clean) for r in runs], 0)

@@ -2,7 +2,7 @@
 
 A diagnostic integrator traces the same camera paths as the ``physical`` mode's clean image
 (:mod:`seahaze.render.haze_integrator`: emitter sampling of the scene's ``sunsky`` and BSDF
-sampling, power-heuristic MIS, :data:`~seahaze.render.haze_integrator.DEFAULT_BOUNCES`
+sampling, power-heuristic MIS, the default ``EstimatorSettings.bounces``
 bounces) but adds each contribution to one of these disjoint path classes (their sum is the
 clean radiance):
 
@@ -63,7 +63,10 @@ def diagnostic_integrator(sun: Any, sky: Any, sea_id: int, sun_dir: np.ndarray, 
     import drjit as dr
     import mitsuba as mi
 
-    from seahaze.render.haze_integrator import DEFAULT_BOUNCES, _mis
+    from seahaze.render.estimator import DEFAULT_SETTINGS
+    from seahaze.render.haze_integrator import mis_weight
+
+    bounces = DEFAULT_SETTINGS.bounces
 
     cos_cone = float(np.cos(np.radians(SUN_CONE_DEG)))
     sun_d = mi.Vector3f(*(float(c) for c in sun_dir))
@@ -98,7 +101,7 @@ def diagnostic_integrator(sun: Any, sky: Any, sea_id: int, sun_dir: np.ndarray, 
                 out["deep_sun"] += dr.select(in_sun & ~glint, value, 0.0)
                 out["deep_sky"] += dr.select(in_sun, 0.0, value)
 
-            for depth in range(DEFAULT_BOUNCES + 1):
+            for depth in range(bounces + 1):
                 si = scene.ray_intersect(ray, active)
                 escaped = active & ~si.is_valid()
                 in_sun = dr.dot(ray.d, sun_d) >= cos_cone
@@ -108,17 +111,17 @@ def diagnostic_integrator(sun: Any, sky: Any, sea_id: int, sun_dir: np.ndarray, 
                     for emitter in (sun, sky):
                         ds_hit = mi.DirectionSample3f(scene, si, prev_si)
                         pdf = emitter.pdf_direction(prev_si, ds_hit, escaped & ~prev_delta)
-                        w = dr.select(prev_delta, 1.0, _mis(prev_pdf, pdf))
+                        w = dr.select(prev_delta, 1.0, mis_weight(prev_pdf, pdf))
                         value += emitter.eval(si, escaped) * w
                     sky_value = dr.select(escaped, beta * value, 0.0)
                 else:
                     emitter = si.emitter(scene, escaped)
                     ds_hit = mi.DirectionSample3f(scene, si, prev_si)
                     em_pdf = scene.pdf_emitter_direction(prev_si, ds_hit, escaped & ~prev_delta)
-                    mis_hit = dr.select(prev_delta, 1.0, _mis(prev_pdf, em_pdf))
+                    mis_hit = dr.select(prev_delta, 1.0, mis_weight(prev_pdf, em_pdf))
                     sky_value = dr.select(escaped, beta * emitter.eval(si, escaped) * mis_hit, 0.0)
                 add(depth, sky_value, in_sun, nee=False)
-                if depth == DEFAULT_BOUNCES:
+                if depth == bounces:
                     break
                 active = active & si.is_valid()
                 is_sea = dr.reinterpret_array(mi.UInt32, si.shape) == sea_id
@@ -140,7 +143,7 @@ def diagnostic_integrator(sun: Any, sky: Any, sea_id: int, sun_dir: np.ndarray, 
                             si, sampler.next_2d(smooth), True, smooth
                         )
                     value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(ds_e.d), smooth)
-                    mis_e = dr.select(ds_e.delta, 1.0, _mis(ds_e.pdf, bsdf_pdf))
+                    mis_e = dr.select(ds_e.delta, 1.0, mis_weight(ds_e.pdf, bsdf_pdf))
                     direct = dr.select(smooth & (ds_e.pdf > 0), beta * value * em_w * mis_e, 0.0)
                     add(depth + 1, direct, dr.dot(ds_e.d, sun_d) >= cos_cone, nee=True)
                 bs, bsdf_weight = bsdf.sample(
@@ -203,7 +206,7 @@ def main() -> None:
 
     from seahaze import imaging
     from seahaze.render.engine import open_session
-    from seahaze.render.scene import _sensor_dict, shape_registry_id, sunsky_dict
+    from seahaze.render.scene import sensor_dict, shape_registry_id, sunsky_dict
     from seahaze.sceneio import load_scene
     from seahaze.spec import with_overrides
     from seahaze.world import sun_direction
@@ -222,7 +225,7 @@ def main() -> None:
     def render(split: bool, sampler: str, spp: int, seed: int) -> tuple[dict, float]:
         integrator = diagnostic_integrator(sun, sky, shape_registry_id(sea), sun_dir, split)
         sensor = mi.load_dict(
-            _sensor_dict(cam, width, height, cam.fov_deg, cam.pitch_deg, False, sampler)
+            sensor_dict(cam, width, height, cam.fov_deg, cam.pitch_deg, False, sampler)
         )
         mi.render(scene, sensor=sensor, spp=1, seed=0, integrator=integrator)  # compile
         start = time.perf_counter()

@@ -20,7 +20,7 @@ from pydantic import ValidationError
 
 from conftest import box_vessel, load_flat_scene, small_spec
 from seahaze.render import denoise, passes, physical
-from seahaze.render.glint_lobe import GLINT_SHARE
+from seahaze.render.estimator import DEFAULT_SETTINGS, EstimatorSettings
 from seahaze.render.scene import sunsky_dict
 from seahaze.spec import with_overrides
 
@@ -32,13 +32,16 @@ def test_sun_cone_sampling_integrates_the_sun_disk() -> None:
     import drjit as dr
     import mitsuba as mi
 
-    from seahaze.render.haze_integrator import make_integrator
+    from seahaze.medium import HomogeneousSlab
+    from seahaze.render.physical import integrator_classes
     from seahaze.render.sun_disk import SUN_APERTURE_DEG, disk_irradiance, sun_axis
 
     spec = small_spec(sun={"elevation_deg": 28.0, "azimuth_deg": 150.0})
     sun = mi.load_dict(sunsky_dict(spec, sky=False))
     sky = mi.load_dict(sunsky_dict(spec, sun=False))
-    integrator = make_integrator(sun, sky, 1, True, 300.0, wind_speed=spec.sea.wind_speed)
+    camera_pass, _ = integrator_classes()
+    medium = HomogeneousSlab(300.0)
+    integrator = camera_pass(sun, sky, medium, 1, True, spec.sea.wind_speed, DEFAULT_SETTINGS)
     n = 200_000
     it = dr.zeros(mi.Interaction3f, n)
     it.p = mi.Point3f(0.0, 0.0, 10.0)
@@ -177,13 +180,14 @@ def _glint_wall_renders(share: float, seeds: range) -> tuple[list[np.ndarray], n
     wall = box_vessel(0, (120.0, 0.0, 8.0), (10.0, 30.0, 16.0))
     loaded, _ = load_flat_scene(spec, [wall], (), haze_box=False)
     mask = passes.render_geometry(loaded).instance == 0
-    renderer = physical.PhysicalRenderer(loaded, spec, glint_share=share)
+    settings = EstimatorSettings(glint_share=share)
+    renderer = physical.PhysicalRenderer(loaded, spec, settings)
     return [renderer.render([], 0.998, 0.75, 16, seed).clean for seed in seeds], mask
 
 
 def test_the_glint_lobe_is_unbiased_and_lowers_a_lit_walls_noise() -> None:
     seeds = range(6)
-    guided, mask = _glint_wall_renders(GLINT_SHARE, seeds)
+    guided, mask = _glint_wall_renders(DEFAULT_SETTINGS.glint_share, seeds)
     plain, _ = _glint_wall_renders(0.0, seeds)
     assert mask.sum() > 100
     # Unbiased: the wall's mean radiance, over seeds, agrees with BSDF sampling alone. (With

@@ -22,6 +22,7 @@ import pytest
 from conftest import box_vessel, load_flat_scene, small_spec
 from reference_tracer import reference_fluence
 from seahaze.render import passes, physical
+from seahaze.render.estimator import EstimatorSettings
 from seahaze.render.photon_tracer import SeaReflectance, Slab, trace_fluence
 from seahaze.visibility import channel_extinction
 
@@ -243,22 +244,21 @@ def test_one_shadow_ray_takes_off_the_hidden_stretch(
     import drjit as dr
     import mitsuba as mi
 
-    from seahaze.render.haze_integrator import make_integrator
+    from seahaze.medium import HomogeneousSlab
+    from seahaze.render.pass_levels import PassLevels
 
     sigma = np.stack(scene.sigmas())
-    integrator = make_integrator(
-        scene.renderer.sun, scene.renderer.sky, len(LEVELS), True, 300.0, wind_speed=7.0
-    )
+    levels = PassLevels(HomogeneousSlab(300.0), len(LEVELS), True)
     tables = np.zeros((2, 2, 2, 3 * len(LEVELS)), np.float32)
-    integrator.set_levels(sigma, np.full(len(LEVELS), 1 / len(LEVELS)), 0.998, 0.75, tables, 0.0)
+    levels.set(sigma, np.full(len(LEVELS), 1 / len(LEVELS)), 0.998, 0.75, tables, 0.0)
     n = 1 << 16
     u = mi.Float((np.arange(n) + 0.5) / n)
     seg = mi.Float(np.full(n, length))
-    s, pdf = integrator.mixture_distance(u, seg)
+    s, pdf = levels.mixture_distance(u, seg)
     full = (mi.Float(np.full(n, depth)), mi.Float(np.full(n, climb)))
     for k in range(len(LEVELS)):
-        taken = dr.select(s > hidden_from, integrator.sun_scattered_at(k, *full, s) / pdf, 0.0)
-        exact = integrator.sun_scattered(k, None, *full, seg) - integrator.sun_scattered(
+        taken = dr.select(s > hidden_from, levels.sun_scattered_at(k, *full, s) / pdf, 0.0)
+        exact = levels.sun_scattered(k, None, *full, seg) - levels.sun_scattered(
             k, None, *full, mi.Float(np.full(n, hidden_from))
         )
         estimate = float(np.mean(np.array(taken, np.float64)))
@@ -268,12 +268,15 @@ def test_one_shadow_ray_takes_off_the_hidden_stretch(
 def test_table_photons_follow_the_pass_budget():
     """One table photon per 32 camera samples, a power of two within the bounds: dataset-size
     renders get the most photons (the tables' noise is level-wide), tests and CI the fewest."""
-    lo, hi = physical.MIN_TABLE_PHOTONS, physical.MAX_TABLE_PHOTONS
-    assert physical.table_photons(1280 * 720 * 42) == hi  # the default scene at full size
-    assert physical.table_photons(1280 * 720 * 32) == hi  # MSVD's size
-    assert physical.table_photons(64 * 36 * 4) == lo
-    assert physical.table_photons(0) == lo
-    assert physical.table_photons(32 << 18) == 1 << 18  # inside the bounds: samples / 32
-    counts = [physical.table_photons(n) for n in np.geomspace(1, 1e10, 200).astype(np.int64)]
+    settings = EstimatorSettings()
+    lo, hi = settings.min_table_photons, settings.max_table_photons
+    assert (lo, hi) == (1 << 17, 1 << 20)
+    table_photons = settings.photons_for
+    assert table_photons(1280 * 720 * 42) == hi  # the default scene at full size
+    assert table_photons(1280 * 720 * 32) == hi  # MSVD's size
+    assert table_photons(64 * 36 * 4) == lo
+    assert table_photons(0) == lo
+    assert table_photons(32 << 18) == 1 << 18  # inside the bounds: samples / 32
+    counts = [table_photons(n) for n in np.geomspace(1, 1e10, 200).astype(np.int64)]
     assert all(lo <= c <= hi and c & (c - 1) == 0 for c in counts)
     assert counts == sorted(counts)

@@ -16,13 +16,17 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from conftest import box_vessel, load_flat_scene, small_spec
-from seahaze.haze import HAZE_BOTTOM_M, hg_phase
+from seahaze.haze import hg_phase
+from seahaze.medium import HomogeneousSlab, haze_medium
 from seahaze.render import passes, physical
 from seahaze.render.diffuse_table import TableGrid, build_tables
+from seahaze.render.estimator import EstimatorSettings
 from seahaze.render.levels import LevelRenderer
 from seahaze.render.photon_tracer import SeaReflectance
 from seahaze.visibility import channel_extinction
@@ -47,7 +51,8 @@ def test_table_equals_single_scattering_quadrature_in_thin_haze(g: float) -> Non
     no_sun = (np.zeros((0, 3)), np.zeros((0, 3)))
     grid = TableGrid(n_z=4)
     black = SeaReflectance.black()
-    (table,) = build_tables(no_sun, sky, black, [sigma], albedo, g, top, 0.0, 1, grid)
+    medium = HomogeneousSlab(top, albedo, g)
+    (table,) = build_tables(no_sun, sky, black, [sigma], medium, 0.0, 1, grid)
     # Quadrature over the downward hemisphere for travel directions ω at bin centres, from
     # straight down through the horizon (where the sky's edge meets the phase peak) to up.
     mu = -1.0 + (np.array([2, 12, 20, 23, 24, 26, 36, 46]) + 0.5) * 2.0 / grid.n_mu
@@ -73,7 +78,8 @@ def test_table_is_zero_without_scattering() -> None:
     rng = np.random.default_rng(0)
     sky = _uniform_sky_photons(10_000, 1.0, rng)
     sun = (np.tile([[0.3, 0.0, -0.954]], (1000, 1)), np.full((1000, 3), 1e-3))
-    (table,) = build_tables(sun, sky, SeaReflectance.black(), [1e-3], 0.0, 0.7, 300.0, 0.0, 2)
+    medium = HomogeneousSlab(300.0, albedo=0.0, g=0.7)
+    (table,) = build_tables(sun, sky, SeaReflectance.black(), [1e-3], medium, 0.0, 2)
     assert np.all(table.values == 0.0)
 
 
@@ -145,7 +151,7 @@ def test_absorbing_haze_attenuates_the_sky_by_beer_lambert(scenes: _Scenes, spec
         "physical", 10000.0, 16, 0, albedo=0.0, extinction_spectrum=spectrum
     ).radiance
     sigma = channel_extinction(10000.0, "koschmieder", spectrum)
-    length = scenes.geo.haze_path_length(scenes.spec.haze.top_m, HAZE_BOTTOM_M)
+    length = scenes.geo.haze_path_length(haze_medium(scenes.spec.haze))
     # Sky pixels whose optical depth is below 2. Each pixel averages 16 random positions over
     # its 0.8° of elevation, across which exp(-σL) changes by up to 15 %: compare row means
     # (48 pixels each) to the pixel-centre law, and the overall mean, channel by channel.
@@ -164,21 +170,23 @@ BOX_VISIBILITY = 2000.0
 """The haze of the box-toward-the-sun scenes (m)."""
 
 
-def _box_toward_the_sun(mode: str):
+def _box_toward_the_sun(mode: str, **estimator: float):
     """A dark red box 300 m away, its shaded side toward the camera, which looks toward the
     sun through V = 2000 m, over a rough sea (a flat mirror would show the box again below it,
     a reflection the vessel-light pass leaves to the tables: docs/physics.md, "Haze in front of
-    a vessel"): the spec and the scene loaded for ``mode``."""
+    a vessel"): the spec and the scene loaded for ``mode``, its ``render.estimator`` set by
+    ``estimator``."""
     spec = small_spec(
         camera={"resolution": [48, 27], "fov_deg": 40.0, "pitch_deg": -2.0},
         sun={"elevation_deg": 25.0, "azimuth_deg": 0.0},
         haze={"levels": [BOX_VISIBILITY]},
+        render={"estimator": estimator},
     )
     box = box_vessel(0, (300.0, 0.0, 8.0), (20.0, 80.0, 16.0))
     return spec, load_flat_scene(spec, [box], (BOX_VISIBILITY,), mode == "reference", 0.3)[0]
 
 
-def test_haze_in_front_of_a_vessel_sees_the_vessel(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_haze_in_front_of_a_vessel_sees_the_vessel() -> None:
     # Forward scattering brings the camera the light of what lies just beyond each point of
     # haze, here the box, not the bright open sky the tables hold.
     visibility = BOX_VISIBILITY
@@ -190,9 +198,11 @@ def test_haze_in_front_of_a_vessel_sees_the_vessel(monkeypatch: pytest.MonkeyPat
     assert on_box.sum() >= 50
     sigma = channel_extinction(visibility, "koschmieder", "grey")
 
-    def box_mean(mode: str, spp: int) -> tuple[np.ndarray, np.ndarray]:
-        """The box's mean RGB and its standard error over 4 seeds."""
-        renderer = LevelRenderer(mode, scenes[mode], geo, clean, spec.haze, spec.render)
+    def box_mean(mode: str, spp: int, loaded=None) -> tuple[np.ndarray, np.ndarray]:
+        """The box's mean RGB and its standard error over 4 seeds (``loaded``: the scene,
+        default the mode's)."""
+        loaded = loaded or scenes[mode]
+        renderer = LevelRenderer(mode, loaded, geo, clean, spec.haze, spec.render)
         means = [
             renderer.render(
                 sigma, 0, spec.render.model_copy(update={"spp": spp, "seed": seed}), spec.haze
@@ -204,44 +214,39 @@ def test_haze_in_front_of_a_vessel_sees_the_vessel(monkeypatch: pytest.MonkeyPat
         return np.mean(means, axis=0), np.std(means, axis=0, ddof=1) / 2.0
 
     ref, ref_se = box_mean("reference", 256)
-    assert physical.VESSEL_LIGHT_SHARE > 0.0  # the pass is on by default
+    assert EstimatorSettings().vessel_light_share > 0.0  # the pass is on by default
     phys, phys_se = box_mean("physical", 32)
     allowed = 0.03 * ref + 3.0 * np.hypot(ref_se, phys_se)
     assert np.all(np.abs(phys - ref) <= allowed), (phys / ref - 1.0, allowed / ref)
     # Without the pass the box is far too bright (measured +12.7 % in every channel).
-    monkeypatch.setattr(physical, "VESSEL_LIGHT_SHARE", 0.0)
-    open_sea, open_sea_se = box_mean("physical", 32)
+    _, without_pass = _box_toward_the_sun("physical", vessel_light_share=0.0)
+    open_sea, open_sea_se = box_mean("physical", 32, without_pass)
     assert np.all(open_sea - ref > 0.06 * ref + 3.0 * np.hypot(ref_se, open_sea_se))
 
 
-def test_aiming_at_the_vessels_keeps_the_vessel_light_and_cuts_its_noise(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
+def test_aiming_at_the_vessels_keeps_the_vessel_light_and_cuts_its_noise() -> None:
     # The pass's probe points drawn near the box and its directions aimed at it (MIS against
     # the levels' mixture and the phase function) estimate the same correction as points
     # and directions from the mixture and phase function alone, with less noise per pixel.
-    from seahaze.render import vessel_light
-
     spec, loaded = _box_toward_the_sun("physical")
     on_box = passes.render_geometry(loaded).instance >= 0
     grey = channel_extinction(BOX_VISIBILITY, "koschmieder", "grey")
     sigma = np.broadcast_to(grey, (1, 3)).copy()
-    monkeypatch.setattr(physical, "VESSEL_LIGHT_SHARE", 1.0)
-    monkeypatch.setattr(physical, "VESSEL_LIGHT_RADIUS_PX", 0)  # the estimator, unsmoothed
-    results = {}
-    for near, aim in ((0.0, 0.0), (vessel_light.NEAR_SHARE, vessel_light.AIM_SHARE)):
-        monkeypatch.setattr(vessel_light, "NEAR_SHARE", near)
-        monkeypatch.setattr(vessel_light, "AIM_SHARE", aim)
-        renderer = physical.PhysicalRenderer(loaded, spec)
-        tables = renderer.tables(sigma, 0.998, 0.75, 1, physical.MIN_TABLE_PHOTONS)
+    # The whole pass at 16 spp, unsmoothed: the estimator itself.
+    pass_only = EstimatorSettings(vessel_light_share=1.0, vessel_light_radius_px=0)
+    aiming = replace(pass_only, near_share=0.0, aim_share=0.0), pass_only
+    results = []
+    for settings in aiming:
+        renderer = physical.PhysicalRenderer(loaded, spec, settings)
+        tables = renderer.tables(sigma, 0.998, 0.75, 1, settings.min_table_photons)
         images = np.stack(
             [
-                renderer._vessel_light(1, True, sigma, 0.998, 0.75, tables, 16, seed)[..., 3:6]
+                renderer.vessel_light(sigma, 0.998, 0.75, tables, 16, seed)[..., 3:6]
                 for seed in range(6)
             ]
         )
-        results[aim] = images
-    plain, aimed = results[0.0], results[vessel_light.AIM_SHARE]
+        results.append(images)
+    plain, aimed = results
     for region in (np.ones_like(on_box), on_box, ~on_box):
         a, b = plain[:, region].mean(axis=(1, 2)), aimed[:, region].mean(axis=(1, 2))
         error = np.hypot(a.std(ddof=1), b.std(ddof=1)) / np.sqrt(len(a))
@@ -285,7 +290,7 @@ def test_table_sea_mixes_in_foam_by_its_coverage() -> None:
     reflectance (independently: the water-only sampling of the same BSDF)."""
     import mitsuba as mi
 
-    from seahaze.render.physical import sample_sea_reflectance
+    from seahaze.render.photon_sources import sample_sea_reflectance
 
     water = mi.load_dict({"type": "roughdielectric", "alpha": 0.1, "int_ior": 1.333})
     rho = 0.22

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from conftest import box_vessel, load_flat_scene, small_spec
-from seahaze.haze import HAZE_BOTTOM_M
 from seahaze.labels import boxes_from_instances
+from seahaze.medium import HomogeneousSlab
 from seahaze.render import passes
 from seahaze.visibility import extinction_coefficient
 
@@ -55,13 +55,14 @@ def test_absorbing_medium_gives_beer_lambert_on_the_sky(sigma):
     hazy = passes.render_reference_level(loaded, sigma, 0.0, 0.0, 256, 1, 0)
     sky = np.isinf(geo.distance_m)
     assert sky.mean() > 0.9
-    length = geo.haze_path_length(300.0, HAZE_BOTTOM_M)[sky]
+    slab = HomogeneousSlab(300.0)
+    length = geo.haze_path_length(slab)[sky]
     t = np.exp(-np.asarray(sigma)[None, ...] * length[:, None]) * np.ones((1, 3))
     assert 0.2 < t.mean() < 0.9
     expected = (clean[sky] * t).sum(axis=0)
     np.testing.assert_allclose(hazy[sky].sum(axis=0), expected, rtol=0.01)
     # The ASM composite with no airlight is the same law, per channel.
-    asm = passes.asm_level(clean, geo, sigma, np.zeros(3), 300.0)
+    asm = passes.asm_level(clean, geo, sigma, np.zeros(3), slab)
     np.testing.assert_allclose(asm[sky].sum(axis=0), expected, rtol=1e-5)
 
 
@@ -71,12 +72,13 @@ def test_haze_path_length_cases():
     d = np.array([[[0.0, 0.6, 0.8], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]]], np.float32)
     dist = np.array([[np.inf, 10.0, np.inf]], np.float32)
     geo = GeometryPass(dist, np.full((1, 3), -1), d, np.array([0.0, 0.0, 10.0]))
-    length = geo.haze_path_length(90.0, -50.0)
+    slab = HomogeneousSlab(90.0, bottom=-50.0)
+    length = geo.haze_path_length(slab)
     assert length[0, 0] == pytest.approx(80.0 / 0.8)  # up to the top
     assert length[0, 1] == pytest.approx(10.0)  # to the surface
     assert np.isinf(length[0, 2])  # horizontal inside the layer: never leaves
     above = GeometryPass(dist, np.full((1, 3), -1), d, np.array([0.0, 0.0, 150.0]))
-    length = above.haze_path_length(90.0, -50.0)
+    length = above.haze_path_length(slab)
     assert length[0, 0] == 0.0 and length[0, 2] == 0.0
 
 
@@ -120,6 +122,6 @@ def test_extreme_visibilities_give_finite_non_negative_images(visibility, mode):
         geo = passes.render_geometry(loaded)
         clean = passes.render_clean(loaded, 2, 3, 0.998, 0.75)
         air = passes.render_airlight(loaded, sigma, 0.998, 0.75, 64, 3, 0)
-        image = passes.asm_level(clean, geo, sigma, air.rgb, 300.0)
+        image = passes.asm_level(clean, geo, sigma, air.rgb, HomogeneousSlab(300.0))
     assert np.all(np.isfinite(image)) and np.all(image >= 0.0)
     assert image.mean() > 0.0

@@ -177,11 +177,11 @@ def test_sea_geometry_carries_foam_wakes_and_the_roughness_mix() -> None:
 def test_the_loaded_scene_exposes_the_flat_sea_optics_for_the_physical_table() -> None:
     """``LoadedScene.sea_roughness`` / ``sea_foam_coverage`` / ``sea_foam_reflectance``, and the
     sea shape's BSDF sampled without a shape (as the physical mode's photon table does) is the
-    foam-free far water, ``_sea_bsdf(spec, sea_roughness)``, sample for sample."""
+    foam-free far water, ``water_bsdf_dict(spec, sea_roughness)``, sample for sample."""
     import drjit as dr
     import mitsuba as mi
 
-    from seahaze.render.scene import _sea_bsdf, build_scene
+    from seahaze.render.scene import build_scene, water_bsdf_dict
 
     spec = _spec()
     camera = Camera.from_spec(spec.camera)
@@ -191,7 +191,7 @@ def test_the_loaded_scene_exposes_the_flat_sea_optics_for_the_physical_table() -
     assert loaded.sea_foam_coverage == pytest.approx(ocean.whitecap_coverage(12.0))
     assert loaded.sea_foam_reflectance == ocean.FOAM_REFLECTANCE
     (shape,) = [s for s in loaded.scene.shapes() if s.id() == "sea"]
-    water = mi.load_dict(_sea_bsdf(spec, loaded.sea_roughness))
+    water = mi.load_dict(water_bsdf_dict(spec, loaded.sea_roughness))
     n = 4096
     rng = np.random.default_rng(0)
     cos_in = rng.uniform(0.05, 1.0, n)

@@ -1,15 +1,10 @@
-"""The physics of the haze layer, in numpy: extinction per channel, the slab, the phase function,
-the size of the rendered haze volume and the atmospheric scattering model.
+"""The haze's optics in numpy: extinction per channel, the phase function, the size of the
+rendered haze volume and the atmospheric scattering model.
 
-Every haze formula lives here (``sigma`` from a visibility lives in :mod:`seahaze.visibility`);
-the drjit copies the ``physical`` integrator traces (:mod:`seahaze.render.jit_haze`) are tested
-against these.
-
-The slab
-    The haze is a homogeneous layer ``HAZE_BOTTOM_M ≤ z ≤ top`` (metres), horizontally
-    unbounded. A straight ray ``o + s·d`` is inside it for ``s`` in one interval; transmittance
-    over a length ``ℓ`` of it is ``exp(−σ ℓ)`` (Beer–Lambert). Its bottom lies below the sea
-    surface, which hides everything beneath.
+Where the haze is — its shape and the optical depth along a ray — is the medium's
+(:mod:`seahaze.medium`); ``sigma`` from a visibility lives in :mod:`seahaze.visibility`. The
+drjit copies of the phase function the ``physical`` kernels trace
+(:mod:`seahaze.render.jit_haze`) are tested against these.
 
 Henyey–Greenstein phase function
     ``p(cos θ) = (1 − g²) / (4π (1 + g² − 2 g cos θ)^{3/2})`` per steradian, normalised over the
@@ -25,10 +20,10 @@ The rendered haze volume
     layer too.
 
 The atmospheric scattering model (``asm`` mode)
-    ``I = J t + A (1 − t)`` with ``t = exp(−σ L)`` per channel, ``J`` the clean radiance, ``L``
-    the length of the camera ray inside the layer and ``A`` the horizon airlight (Koschmieder
-    1924; Narasimhan & Nayar 2002, IJCV 48, 233). It ignores the sunlit shading that real haze
-    removes along the ray: 5–17 % biased against ``volpath`` (docs/benchmarks.md).
+    ``I = J t + A (1 − t)`` with ``t = exp(−τ)`` per channel, ``J`` the clean radiance, ``τ``
+    the optical depth of the camera ray up to its surface and ``A`` the horizon airlight
+    (Koschmieder 1924; Narasimhan & Nayar 2002, IJCV 48, 233). It ignores the sunlit shading
+    that real haze removes along the ray (its bias against ``volpath``: docs/benchmarks.md).
 """
 
 from __future__ import annotations
@@ -36,8 +31,6 @@ from __future__ import annotations
 import numpy as np
 
 FOUR_PI = 4.0 * np.pi
-HAZE_BOTTOM_M = -60.0
-"""Bottom of the haze layer below sea level; the sea surface hides everything beneath it."""
 BOX_OPTICAL_HALF_WIDTH = 8.0
 """Least optical depth ``σ W`` from the camera (or the farthest object) to the haze box side."""
 
@@ -86,53 +79,22 @@ def rotate_directions(d: np.ndarray, cos_theta: np.ndarray, phi: np.ndarray) -> 
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
-def slab_interval(
-    oz: np.ndarray | float, dz: np.ndarray | float, bottom: float, top: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Ray parameters ``[enter, leave]`` (m, ``enter ≥ 0``) of ``o + s·d`` inside the slab.
-
-    ``leave < enter`` means the ray never enters; ``leave`` is ``inf`` for a horizontal ray in
-    the slab. Only the z components matter because the slab is horizontally unbounded.
-    """
-    oz = np.asarray(oz, dtype=np.float64)
-    dz = np.asarray(dz, dtype=np.float64)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s_bottom = (bottom - oz) / dz
-        s_top = (top - oz) / dz
-    flat = np.abs(dz) < 1e-12
-    inside = (oz >= bottom) & (oz <= top)
-    enter = np.where(flat, np.where(inside, 0.0, np.inf), np.minimum(s_bottom, s_top))
-    leave = np.where(flat, np.where(inside, np.inf, -np.inf), np.maximum(s_bottom, s_top))
-    return np.maximum(enter, 0.0), leave
-
-
-def path_length_in_slab(
-    origin_z: float,
-    directions_z: np.ndarray,
-    distance_m: np.ndarray,
-    top_m: float,
-    bottom_m: float = HAZE_BOTTOM_M,
-) -> np.ndarray:
-    """Length (m) of each ray inside the haze layer up to its surface distance.
-
-    A ray ends at ``distance_m`` (``inf`` for the sky); only its part inside
-    ``bottom_m ≤ z ≤ top_m`` attenuates. Exact for a straight ray and an unbounded layer.
-    """
-    enter, leave = slab_interval(origin_z, directions_z, bottom_m, top_m)
-    stop = np.minimum(leave, np.asarray(distance_m, dtype=np.float64))
-    return np.maximum(stop - enter, 0.0)
-
-
 def haze_box_half_width(sigma_min: float, reach_m: float = 0.0) -> float:
     """Half-width (m) of the rendered haze box: ``reach + 8/σ`` for the least extinction ``σ``
     (1/m) of the run and objects out to ``reach_m`` (see the module docstring)."""
     return reach_m + BOX_OPTICAL_HALF_WIDTH / float(sigma_min)
 
 
-def asm_composite(
-    clean: np.ndarray, path_length_m: np.ndarray, sigma: Extinction, airlight_rgb: np.ndarray
-) -> np.ndarray:
-    """The atmospheric scattering model ``I = J t + A (1 − t)``, ``t = exp(−σ_c L)`` per channel,
-    for clean radiance ``J`` (H, W, 3), path lengths ``L`` (H, W) and airlight ``A`` (3,)."""
-    t = np.exp(-extinction_rgb(sigma)[None, None, :] * path_length_m[..., None])
+def optical_depth(sigma: Extinction, reduced_length_m: np.ndarray) -> np.ndarray:
+    """Per-pixel optical depth ``τ_c = σ_c ℓ`` (H, W, 3) of a level of extinction ``sigma``
+    (1/m, grey or R, G, B) over the reduced lengths ``ℓ`` (H, W; m) of the pixels' rays in the
+    medium (:meth:`seahaze.medium.HazeMedium.path_length`)."""
+    return extinction_rgb(sigma)[None, None, :] * reduced_length_m[..., None]
+
+
+def asm_composite(clean: np.ndarray, tau: np.ndarray, airlight_rgb: np.ndarray) -> np.ndarray:
+    """The atmospheric scattering model ``I = J t + A (1 − t)``, ``t = exp(−τ_c)`` per channel,
+    for clean radiance ``J`` (H, W, 3), optical depths ``τ`` (H, W, 3, :func:`optical_depth`)
+    and airlight ``A`` (3,)."""
+    t = np.exp(-tau)
     return (clean * t + airlight_rgb[None, None, :] * (1.0 - t)).astype(np.float32)

@@ -548,6 +548,61 @@ EXPOSURE_RANGE = (1.0e-3, 1.0e3)
 """Allowed fixed ``render.exposure``; ``auto`` gives about 3–6 under the physical sun and sky."""
 
 
+class EstimatorSpec(_Spec):
+    """The `physical` estimator's tuning (seahaze.render.estimator.EstimatorSettings); every
+    field left out (null) keeps seahaze's measured default (docs/benchmarks.md)."""
+
+    bounces: int | None = Field(
+        None, ge=1, le=16, description="Surface interactions per camera path (default 3)."
+    )
+    camera_points: int | None = Field(
+        None,
+        ge=1,
+        le=8,
+        description="Stratified in-scattering points on the camera segment (default 2).",
+    )
+    glint_share: float | None = Field(
+        None,
+        ge=0.0,
+        le=1.0,
+        description="Share of a hull's next directions drawn toward the sea's sun glint "
+        "(default 0.7; 0: BSDF sampling alone).",
+    )
+    vessel_light_share: float | None = Field(
+        None,
+        ge=0.0,
+        le=1.0,
+        description="Samples per pixel of the vessel-light pass as a share of the main pass's, "
+        "rounded up (default 1/14; 0 leaves the pass out).",
+    )
+    vessel_light_radius_px: int | None = Field(
+        None,
+        ge=0,
+        le=64,
+        description="Radius of the box filter smoothing the vessel-light pass within each "
+        "segment of the image (default 6 px; 0: unsmoothed).",
+    )
+    near_share: float | None = Field(
+        None,
+        ge=0.0,
+        le=1.0,
+        description="Share of the vessel-light probes' points drawn near a vessel (default 0.5).",
+    )
+    aim_share: float | None = Field(
+        None,
+        ge=0.0,
+        le=1.0,
+        description="Share of the vessel-light probes aimed at a vessel (default 0.5).",
+    )
+    table_photons: int | None = Field(
+        None,
+        ge=1024,
+        le=1 << 24,
+        description="Photons per level of the diffuse tables (default: by the pass's size, "
+        "2^17 to 2^20).",
+    )
+
+
 class RenderSpec(_Spec):
     """How the scene is rendered."""
 
@@ -598,6 +653,10 @@ class RenderSpec(_Spec):
         "3–6 under the physical sun and sky).",
     )
     write_exr: bool = Field(True, description="Also write linear radiance as EXR for every image.")
+    estimator: EstimatorSpec = Field(
+        default_factory=EstimatorSpec,
+        description="The `physical` estimator's tuning; leave it out for the measured defaults.",
+    )
     denoise: Literal["off", "on"] = Field(
         "off",
         description="`on`: Intel Open Image Denoise (the optional `pyoidn` package, `pip install "

@@ -17,7 +17,8 @@ The estimate is the cost model of ``scripts/measure_cost_model.py``, measured on
 
 except in ``physical``, whose one pass gives the clean image and every level: its render part is
 ``pixels · spp · (pass + (levels − 1) · level) + photons / 2^17 · Σ_levels table(V)``, the tables
-timed at 2^17 photons and traced with ``render.physical.table_photons(pixels · spp)``.
+timed at 2^17 photons and traced with ``EstimatorSettings.photons_for(pixels · spp)``
+(:mod:`seahaze.render.estimator`).
 
 ``V``-dependent constants are interpolated in log V between 50, 300 and 4000 m (held beyond).
 On a GPU (``cuda_ad_rgb``) the estimate is an upper bound.
@@ -140,12 +141,14 @@ def scene_core_seconds(spec: SceneSpec) -> tuple[float, float]:
     if mode == "physical":
         # One pass gives the clean image and every level; each level adds a little to it
         # and its diffuse table.
-        from ..render.physical import MIN_TABLE_PHOTONS, table_photons
+        from ..render.estimator import settings_from
+
+        settings = settings_from(spec.render.estimator)
 
         further = max(len(levels) - 1, 0) * PHYSICAL_LEVEL_CORE_S
         parallel = pixels * spp * (PHYSICAL_PASS_CORE_S + further)
         # The tables were timed at the fewest photons; larger passes trace more.
-        photons = table_photons(pixels * spp) / MIN_TABLE_PHOTONS
+        photons = settings.photons_for(pixels * spp) / settings.min_table_photons
         tables = photons * sum(_interpolated(PHYSICAL_TABLE_S, v) for v in levels)
         return serial, parallel + tables
     parallel = pixels * spp * CLEAN_CORE_S

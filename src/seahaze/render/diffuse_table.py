@@ -40,6 +40,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..haze import hg_phase
+from ..medium import HazeMedium
 from .photon_tracer import SeaReflectance, Slab, trace_fluence
 
 
@@ -126,15 +127,14 @@ def build_tables(
     sky: Photons,
     sea: SeaReflectance,
     sigmas: Sequence[float],
-    albedo: float,
-    g: float,
-    top_m: float,
+    medium: HazeMedium,
     sun_azimuth_rad: float,
     seed: int,
     grid: TableGrid = DEFAULT_GRID,
 ) -> list[DiffuseTable]:
-    """Tabulate the diffuse field of a slab ``0 ≤ z ≤ top_m`` for every extinction in ``sigmas``
-    (1/m, each > 0) from the same source photons (see the module docstring).
+    """Tabulate the diffuse field of ``medium`` (a homogeneous one: its single-scattering
+    albedo and ``g``, over ``0 ≤ z ≤ top``) for every extinction in ``sigmas`` (1/m, each > 0)
+    from the same source photons (see the module docstring).
 
     The first flight of ``sun`` photons is direct light (the integrator's shadow rays) and is
     not tallied; ``sky`` photons are tallied from the moment they enter, so the table also
@@ -142,6 +142,11 @@ def build_tables(
     ``i`` of every extinction draws the same random numbers (correlated table noise across
     levels, as the camera paths are).
     """
+    if not medium.is_homogeneous:
+        raise NotImplementedError(
+            f"the diffuse tables are traced in homogeneous media; {type(medium).__name__} is not"
+        )
+    top_m, albedo, g = medium.top_m, medium.albedo, medium.g
     sigmas = [float(x) for x in sigmas]
     if any(x <= 0.0 for x in sigmas):
         raise ValueError(f"the diffuse table needs haze (sigma > 0), got {sigmas}")

@@ -386,14 +386,11 @@ def _assemble(
 
 def render_meta(spec: SceneSpec) -> dict[str, Any]:
     """``meta``'s ``render`` entry: the samples actually taken, the ``physical`` mode's
-    vessel-light pass (its samples per pixel and smoothing radius) and what the denoiser did."""
+    estimator settings and vessel-light pass (its samples per pixel and smoothing radius) and
+    what the denoiser did."""
     from . import denoise
-    from .physical import (
-        VESSEL_LIGHT_RADIUS_PX,
-        VESSEL_LIGHT_SHARE,
-        stratified_spp,
-        vessel_light_spp,
-    )
+    from .estimator import settings_from
+    from .physical import stratified_spp, vessel_light_spp
 
     physical = spec.render.mode == "physical"
     entry: dict[str, Any] = {
@@ -402,10 +399,13 @@ def render_meta(spec: SceneSpec) -> dict[str, Any]:
         "sampler": PHYSICAL_SAMPLER if physical else "independent",
         "denoise": spec.render.denoise,
     }
-    if physical and VESSEL_LIGHT_SHARE > 0.0:
+    settings = settings_from(spec.render.estimator)
+    if physical:
+        entry["estimator"] = settings.record()
+    if physical and settings.vessel_light_share > 0.0:
         entry["vessel_light"] = {
-            "spp": vessel_light_spp(spec.render.spp),
-            "smoothing_radius_px": VESSEL_LIGHT_RADIUS_PX,
+            "spp": vessel_light_spp(spec.render.spp, settings),
+            "smoothing_radius_px": settings.vessel_light_radius_px,
         }
     if spec.render.denoise == "on":
         entry["denoiser"] = {

@@ -14,9 +14,10 @@ The lobe is a von Mises–Fisher distribution on the unit sphere around ``m`` (F
 near the mode is ``1/κ``; matching it gives ``κ = 1/(2σ²)`` (:func:`lobe_kappa`): 12.9 at
 7 m/s, 6.1 at 15 m/s, 167 on a calm sea. The glint is a caustic, bright and a few tenths of a
 steradian wide, that a hull's cosine-weighted BSDF samples find only now and then; the
-``physical`` integrator draws :data:`GLINT_SHARE` of a facing hull's next directions from this
-lobe and weighs every direction by the mixture's density, so the estimate stays unbiased
-whatever the lobe's shape (docs/physics.md, "The glint on the hulls").
+``physical`` integrator draws a share of a facing hull's next directions from this lobe
+(``EstimatorSettings.glint_share``, :mod:`seahaze.render.estimator`) and weighs every
+direction by the mixture's density, so the estimate stays unbiased whatever the lobe's shape
+(docs/physics.md, "The glint on the hulls").
 """
 
 from __future__ import annotations
@@ -26,10 +27,6 @@ from typing import Any
 import numpy as np
 
 from ..ocean.cox_munk import mean_square_slope
-
-GLINT_SHARE = 0.7
-"""Share of a facing surface's continuation directions drawn from the lobe (measured: the
-hulls' noise fell from 0.3 to 0.7 and little beyond; docs/benchmarks.md)."""
 
 
 def mirror_axis(sun_axis: np.ndarray) -> np.ndarray:
@@ -45,7 +42,7 @@ def lobe_kappa(wind_speed: float) -> float:
     return 1.0 / (2.0 * mean_square_slope(wind_speed))
 
 
-def lobe_share(sun_axis: np.ndarray, share: float = GLINT_SHARE) -> float:
+def lobe_share(sun_axis: np.ndarray, share: float) -> float:
     """The share of directions drawn from the lobe: ``share`` while the sun is above the
     horizon, 0 when it is not (a sun below the sea plane makes no glint)."""
     return float(share) if float(sun_axis[2]) > 0.0 else 0.0
@@ -71,7 +68,7 @@ class GlintLobe:
     draw from it, the density of their continuation mixture, and the draw itself. Every
     parameter is an opaque drjit value: another sun or sea reuses the compiled kernel."""
 
-    def __init__(self, sun_axis: np.ndarray, wind_speed: float, share: float = GLINT_SHARE):
+    def __init__(self, sun_axis: np.ndarray, wind_speed: float, share: float):
         """``sun_axis``: unit vector toward the sun; ``wind_speed`` (m/s): the sea's, which
         sets the lobe's width; ``share``: of a facing surface's next directions."""
         import drjit as dr

@@ -1,9 +1,11 @@
-"""drjit versions of the haze formulas of :mod:`seahaze.haze`, for the traced integrator.
+"""drjit versions of the phase-function formulas of :mod:`seahaze.haze`, for the kernels.
 
-The same formulas as the numpy ones, written with drjit operations so that they trace into the
-``physical`` mode's compiled kernels; ``tests/test_jit_haze.py`` holds them to the numpy
-originals. Arguments are drjit arrays (or Python floats where noted). Also the one rule for
-data those kernels read (:func:`owned_floats`).
+The Henyey–Greenstein phase function, its sampling and the frame it rotates in, written with
+drjit operations so that they trace into the ``physical`` mode's compiled kernels (a Python
+branch on ``g`` would bake it in); ``tests/test_jit_haze.py`` holds them to the numpy
+originals. The medium's own formulas (where the haze is, optical depths) are written once for
+both array libraries in :mod:`seahaze.medium`. Also the one rule for data those kernels read
+(:func:`owned_floats`).
 """
 
 from __future__ import annotations
@@ -13,27 +15,6 @@ from typing import Any
 import numpy as np
 
 from ..haze import FOUR_PI
-
-TINY_OPTICAL_DEPTH = 1e-3
-"""Below this, ``1 − e^{−τ}`` is evaluated as ``τ (1 − τ/2)`` (float32 cancellation)."""
-FLAT_DZ = 1e-7
-"""A ray with ``|d_z|`` below this is horizontal for the slab (float32 directions)."""
-
-
-def slab_interval(oz: Any, dz: Any, bottom: Any, top: Any) -> tuple[Any, Any]:
-    """Ray parameters ``[enter, leave]`` (``enter ≥ 0``) of ``o + s·d`` inside the slab
-    ``bottom ≤ z ≤ top``; as :func:`seahaze.haze.slab_interval`."""
-    import drjit as dr
-
-    inv = dr.rcp(dz)
-    s_bottom = (bottom - oz) * inv
-    s_top = (top - oz) * inv
-    flat = dr.abs(dz) < FLAT_DZ
-    inside = (oz >= bottom) & (oz <= top)
-    inf = dr.inf
-    enter = dr.select(flat, dr.select(inside, 0.0, inf), dr.minimum(s_bottom, s_top))
-    leave = dr.select(flat, dr.select(inside, inf, -inf), dr.maximum(s_bottom, s_top))
-    return dr.maximum(enter, 0.0), leave
 
 
 def hg_phase(cos_theta: Any, g: Any) -> Any:
@@ -123,23 +104,3 @@ def padded_floats(values: np.ndarray) -> Any:
     index. drjit treats a one-element array as a scalar, a different kernel from the one for
     several levels; the padding keeps one kernel for every level count."""
     return owned_floats(np.append(np.asarray(values, np.float32), np.float32(0.0)))
-
-
-def sun_scattered_fraction(
-    sigma: Any, near: Any, e_start: Any, climb: Any, inv_climb: Any, length: Any
-) -> Any:
-    """``σ ∫₀^ℓ e^{−(τ₀ + σ c s)} ds``: per unit of the sun's source, the light scattered
-    toward a segment's start by its first ``length`` metres, each point's light attenuated on
-    its way from the sun and on to the start. At distance ``s`` the two paths have optical
-    depth ``τ₀ + σ c s``: ``τ₀ = e_start`` toward the sun from the start (``near`` =
-    ``e^{−τ₀}``), plus ``σ s`` back to the start, less ``σ s d_z / μ_sun`` toward the sun
-    (``c = climb = 1 − d_z / μ_sun``, negative where the segment climbs more steeply than the
-    sun). In closed form ``(near − e^{−(τ₀ + σ c ℓ)}) / c``, by its series where ``σ c ℓ``
-    is too small for float32. ``inv_climb`` = ``1 / c``, computed once for every level;
-    ``sigma`` may be RGB."""
-    import drjit as dr
-
-    x = sigma * climb * length
-    far = dr.exp(-dr.maximum(e_start + x, 0.0))  # τ at the end is >= 0: never overflows
-    series = sigma * near * length * (1.0 - 0.5 * x)
-    return dr.select(dr.abs(x) < TINY_OPTICAL_DEPTH, series, (near - far) * inv_climb)

@@ -21,9 +21,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..haze import Extinction
+from ..medium import haze_medium
 from ..seeds import RenderPass, render_seed
 from ..spec import RENDER_MODES, HazeSpec, RenderSpec
 from . import passes
+from .estimator import settings_from
 from .passes import Airlight, GeometryPass
 from .physical import PhysicalRenderer
 from .scene import LoadedScene
@@ -91,7 +93,8 @@ class LevelRenderer:
             airlight = passes.render_airlight(
                 loaded, sigma, haze.albedo, haze.g, render.airlight_spp, render.seed, level_index
             )
-            radiance = passes.asm_level(self.clean, self.geometry, sigma, airlight.rgb, haze.top_m)
+            medium = haze_medium(haze)
+            radiance = passes.asm_level(self.clean, self.geometry, sigma, airlight.rgb, medium)
             return LevelRender(radiance, airlight)
         # Physical: one pass from the scene's camera paths (whatever the level index), so a
         # level rendered alone equals its member of a pass over all levels.
@@ -111,7 +114,9 @@ class LevelRenderer:
             return self.clean, [self.render(s, i, render, haze) for i, s in enumerate(sigmas)]
         if self._physical is None:
             assert self.loaded.spec is not None  # checked in __init__
-            self._physical = PhysicalRenderer(self.loaded, self.loaded.spec, geometry=self.geometry)
+            spec = self.loaded.spec
+            settings = settings_from(spec.render.estimator)
+            self._physical = PhysicalRenderer(self.loaded, spec, settings, self.geometry)
         seed = render_seed(render.seed, RenderPass.PHYSICAL_PASS)
         out = self._physical.render(sigmas, haze.albedo, haze.g, render.spp, seed)
         return out.clean, [LevelRender(r) for r in out.levels]

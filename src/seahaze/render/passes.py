@@ -5,7 +5,7 @@ Passes return linear radiance and per-pixel geometry as numpy arrays; they write
 Hazy levels of the yardstick modes (the ``physical`` mode is :mod:`seahaze.render.physical`)
     ``reference``  Mitsuba ``volpath`` through the haze box: unbiased, slow, noisy at low spp.
     ``asm``        The atmospheric scattering model (:func:`seahaze.haze.asm_composite`) with the
-                   exact path length of each pixel's ray in the layer and the level's horizon
+                   exact optical depth of each pixel's ray in the medium and the level's horizon
                    airlight: a ``volpath`` render of a narrow horizontal view at the camera
                    height, where the haze is optically thick at every level.
 """
@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from ..haze import HAZE_BOTTOM_M, Extinction, asm_composite, path_length_in_slab
+from ..haze import Extinction, asm_composite, optical_depth
+from ..medium import HazeMedium
 from ..seeds import RenderPass, render_seed
 from .scene import VESSEL_SHAPE, LoadedScene, stratified_spp
 
@@ -44,12 +45,11 @@ class GeometryPass:
         """(H, W) elevation of every pixel-centre ray above the horizontal (deg)."""
         return np.degrees(np.arcsin(np.clip(self.directions[..., 2], -1.0, 1.0)))
 
-    def haze_path_length(self, top_m: float, bottom_m: float = HAZE_BOTTOM_M) -> np.ndarray:
-        """(H, W) length (m) of each pixel-centre ray inside the haze layer, up to its surface
-        (:func:`seahaze.haze.path_length_in_slab`)."""
-        return path_length_in_slab(
-            float(self.origin[2]), self.directions[..., 2], self.distance_m, top_m, bottom_m
-        )
+    def haze_path_length(self, medium: HazeMedium) -> np.ndarray:
+        """(H, W) reduced length (m) of each pixel-centre ray in ``medium`` up to its surface
+        (:meth:`seahaze.medium.HazeMedium.path_length`): a level's per-pixel optical depth is
+        its extinction times this."""
+        return medium.path_length(float(self.origin[2]), self.directions[..., 2], self.distance_m)
 
 
 def render_geometry(loaded: LoadedScene) -> GeometryPass:
@@ -242,8 +242,10 @@ def asm_level(
     geometry: GeometryPass,
     sigma: Extinction,
     airlight_rgb: np.ndarray,
-    top_m: float,
+    medium: HazeMedium,
 ) -> np.ndarray:
     """Hazy radiance by the atmospheric scattering model from the clean radiance, the exact
-    path lengths of the geometry pass and the level's airlight."""
-    return asm_composite(clean, geometry.haze_path_length(top_m), sigma, airlight_rgb)
+    per-pixel optical depth in ``medium`` of the geometry pass's rays and the level's
+    airlight."""
+    tau = optical_depth(sigma, geometry.haze_path_length(medium))
+    return asm_composite(clean, tau, airlight_rgb)

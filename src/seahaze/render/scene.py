@@ -18,7 +18,7 @@ slope budget, docs/ocean.md) and then the water with a Lambertian foam whose ref
 ``vertex_foam_reflectance`` (weighted by ``vertex_foam``). Where no shape is attached to a
 surface interaction (a BSDF sampled with a bare ``SurfaceInteraction3f``, as the ``physical``
 mode's photon table does) the attribute textures evaluate to 0 and the blend is the far water
-alone, :func:`_sea_bsdf` with :attr:`LoadedScene.sea_roughness`.
+alone, :func:`water_bsdf_dict` with :attr:`LoadedScene.sea_roughness`.
 """
 
 from __future__ import annotations
@@ -30,7 +30,8 @@ from typing import Any
 import numpy as np
 
 from ..camera import Camera
-from ..haze import HAZE_BOTTOM_M, Extinction, extinction_rgb, haze_box_half_width
+from ..haze import Extinction, extinction_rgb, haze_box_half_width
+from ..medium import HazeMedium, haze_medium
 from ..ocean import FOAM_REFLECTANCE
 from ..spec import SceneSpec
 from ..visibility import channel_extinction
@@ -75,7 +76,7 @@ def _mi():
     return mi
 
 
-def _sensor_dict(
+def sensor_dict(
     camera: Camera,
     width: int,
     height: int,
@@ -84,6 +85,9 @@ def _sensor_dict(
     inside_haze: bool,
     sampler: str = "independent",
 ) -> dict:
+    """The Mitsuba ``perspective`` sensor dict of ``camera`` at ``width`` × ``height`` pixels,
+    ``fov_deg`` wide (horizontally) and pitched by ``pitch_deg``, with a box-filtered RGB film
+    and a ``sampler`` of that name; ``inside_haze`` starts its rays in the haze medium."""
     mi = _mi()
     cam = replace(camera, fov_deg=fov_deg, pitch_deg=pitch_deg, width=width, height=height)
     forward, _right, up = cam.basis()
@@ -139,7 +143,7 @@ def _sea_mesh(sea: MeshData, bsdf: dict) -> Any:
     return _mesh(sea.name, sea.vertices, sea.faces, _mi().load_dict(bsdf), attributes)
 
 
-def _sea_bsdf(spec: SceneSpec, roughness: float) -> dict:
+def water_bsdf_dict(spec: SceneSpec, roughness: float) -> dict:
     """Fresnel interface (n = ior) over a dark diffuse water body: Mitsuba's rough plastic.
 
     Beckmann microfacets, because Cox and Munk's sea-surface slopes are Gaussian.
@@ -156,17 +160,17 @@ def _sea_bsdf(spec: SceneSpec, roughness: float) -> dict:
 
 
 def sea_surface_bsdf(spec: SceneSpec, geometry: SceneGeometry) -> dict:
-    """The sea shape's BSDF: water of :func:`_sea_bsdf`, its near and far roughness lobes
+    """The sea shape's BSDF: water of :func:`water_bsdf_dict`, its near and far roughness lobes
     mixed per vertex, under foam where the sea mesh has some (module docstring)."""
     attributes = geometry.sea.attributes
-    water = _sea_bsdf(spec, geometry.sea_roughness)
+    water = water_bsdf_dict(spec, geometry.sea_roughness)
     near = geometry.sea_roughness_near
     if near is not None and SEA_NEAR_ROUGHNESS in attributes:
         water = {
             "type": "blendbsdf",
             "weight": {"type": "mesh_attribute", "name": f"vertex_{SEA_NEAR_ROUGHNESS}"},
             "bsdf_0": water,
-            "bsdf_1": _sea_bsdf(spec, near),
+            "bsdf_1": water_bsdf_dict(spec, near),
         }
     if SEA_FOAM not in attributes:
         return water
@@ -216,7 +220,8 @@ class LoadedScene:
     params: Any
     camera: Camera
     box_half_width_m: float
-    haze_top_m: float
+    medium: HazeMedium
+    """The haze the scene's levels render (its optics are the spec's; each level scales it)."""
     shape_ids: dict[int, int]
     """Mitsuba shape registry id → what it is: the sea -1, the haze box -2, a vessel mesh
     :data:`VESSEL_SHAPE` (its faces' vessels are in :attr:`vessel_faces`)."""
@@ -225,7 +230,7 @@ class LoadedScene:
     sea_roughness: float = 0.0
     """Beckmann ``alpha`` (dimensionless) of the sea as a flat surface: all of Cox–Munk's slopes
     for the wind (or the spec's ``sea.roughness``), the far sea's lobe. A model of the sea as a
-    plane (the ``physical`` mode's table) reflects with ``_sea_bsdf(spec, sea_roughness)``."""
+    plane (the ``physical`` mode's table) reflects with ``water_bsdf_dict(spec, sea_roughness)``."""
     sea_foam_coverage: float = 0.0
     """Mean fraction (0–1) of the sea surface covered by foam: the whitecap coverage law's
     ``W`` for the wind (0.0046 at 8 m/s, 0.039 at 15 m/s; 0 without whitecaps or on a flat
@@ -246,7 +251,8 @@ class LoadedScene:
     @property
     def has_haze_box(self) -> bool:
         """Whether the scene holds the Mitsuba haze medium (not so for the physical mode)."""
-        return f"{HAZE_ID}.sigma_t.value.value" in self.params
+        names = self.params.keys()  # iterating the parameters themselves would read values
+        return any(name.startswith(f"{HAZE_ID}.") for name in names)
 
     def set_haze(self, sigma_t: Extinction, albedo: float, g: float) -> None:
         """Change the medium in place (no reload, no recompilation); ``sigma_t`` (1/m) is grey
@@ -256,10 +262,19 @@ class LoadedScene:
             if rgb.max() > 0.0:
                 raise ValueError("this scene was loaded without a haze box (haze_box=False)")
             return
-        self.params[f"{HAZE_ID}.sigma_t.value.value"] = _mi().Color3f(*(float(c) for c in rgb))
-        self.params[f"{HAZE_ID}.albedo.value.value"] = albedo
-        self.params[f"{HAZE_ID}.phase_function.g"] = g
+        for name, value in self.medium.mitsuba_level(rgb, albedo, g).items():
+            self.params[f"{HAZE_ID}.{name}"] = value
         self.params.update()
+
+
+def _box_corners(
+    camera: Camera, half_width: float, bottom: float, top: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """World corners (m) of the haze box around the camera: ``half_width`` to each side,
+    from the medium's ``bottom`` to its ``top``."""
+    centre = np.array([camera.x_m, camera.y_m])
+    low = np.array([*(centre - half_width), bottom])
+    return low, np.array([*(centre + half_width), top])
 
 
 def shape_registry_id(shape: Any) -> int:
@@ -280,6 +295,7 @@ def build_scene(
     black_vessels: bool = False,
     haze_box: bool = True,
     reach_m: float = 0.0,
+    medium: HazeMedium | None = None,
 ) -> LoadedScene:
     """Load the Mitsuba scene for ``spec`` with a haze box wide enough for ``visibilities_m``
     and objects out to ``reach_m`` (:func:`seahaze.haze.haze_box_half_width`).
@@ -287,31 +303,27 @@ def build_scene(
     ``black_vessels`` gives every vessel a black diffuse surface instead of painted steel (the
     black calibration targets of ``seahaze verify``). ``haze_box=False`` leaves the Mitsuba
     medium out: the ``physical`` mode computes the haze analytically in its own integrator and
-    needs only the surfaces, sun and sky.
+    needs only the surfaces, sun and sky. ``medium``: the haze, default the one ``spec.haze``
+    describes (:func:`seahaze.medium.haze_medium`).
     """
     mi = _mi()
-    top = spec.haze.top_m
     haze = spec.haze
+    medium = medium or haze_medium(haze)
+    top, bottom = medium.top_m, medium.bottom_m
     sigma_min = min(
         channel_extinction(v, haze.threshold, haze.extinction_spectrum).min()
         for v in visibilities_m or [1.0e4]
     )
     half_width = max(
-        haze_box_half_width(sigma_min, reach_m), BOX_LAYER_WIDTHS * (top - HAZE_BOTTOM_M)
+        haze_box_half_width(sigma_min, reach_m), BOX_LAYER_WIDTHS * (top - bottom)
     )
     inside = camera.height_m < top and haze_box
     integrator = {"type": "volpath", "max_depth": spec.render.max_depth, "rr_depth": 8}
     scene: dict[str, Any] = {
         "type": "scene",
         "integrator": integrator,
-        HAZE_ID: {
-            "type": "homogeneous",
-            # RGB so that the extinction may differ per channel (haze.extinction_spectrum).
-            "sigma_t": {"type": "rgb", "value": [0.0, 0.0, 0.0]},
-            "albedo": spec.haze.albedo,
-            "phase": {"type": "hg", "g": spec.haze.g},
-        },
-        "sensor": _sensor_dict(
+        HAZE_ID: medium.mitsuba_medium(*_box_corners(camera, half_width, bottom, top)),
+        "sensor": sensor_dict(
             camera,
             camera.width,
             camera.height,
@@ -323,7 +335,7 @@ def build_scene(
         # The asm airlight is the haze's own horizon radiance. From a camera above the haze top
         # a level view sees only clear sky (the same A at every level), so the airlight view
         # then looks from mid-layer, below the camera.
-        "sensor_airlight": _sensor_dict(
+        "sensor_airlight": sensor_dict(
             replace(camera, height_m=camera.height_m if camera.height_m < top else 0.5 * top),
             AIRLIGHT_RES,
             AIRLIGHT_RES,
@@ -335,8 +347,8 @@ def build_scene(
         HAZE_BOX_ID: {
             "type": "cube",
             "to_world": mi.ScalarTransform4f()
-            .translate([camera.x_m, camera.y_m, 0.5 * (top + HAZE_BOTTOM_M)])
-            .scale([half_width, half_width, 0.5 * (top - HAZE_BOTTOM_M)]),
+            .translate([camera.x_m, camera.y_m, 0.5 * (top + bottom)])
+            .scale([half_width, half_width, 0.5 * (top - bottom)]),
             "bsdf": {"type": "null"},
             "interior": {"type": "ref", "id": HAZE_ID},
         },
@@ -358,7 +370,7 @@ def build_scene(
     clean_scene = None
     if haze_box:
         # The clean pass's scene: the same mesh objects (shared, not copied), no box, no medium.
-        sensor = _sensor_dict(
+        sensor = sensor_dict(
             camera, camera.width, camera.height, camera.fov_deg, camera.pitch_deg, False
         )
         clean = {"type": "scene", "integrator": integrator, "sensor": sensor}
@@ -379,7 +391,7 @@ def build_scene(
         params,
         camera,
         half_width,
-        top,
+        medium,
         shape_ids,
         spec,
         vessel_faces=vessel_faces,

@@ -8,8 +8,9 @@ darker than the open-sea field makes it, a sunlit white hull brighter. It is the
 effect of remote sensing, where the light of neighbouring ground is scattered into the line of
 sight (Tanré, Herman & Deschamps 1981, *Applied Optics* 20, 3676).
 
-:class:`VesselLight` is the correction, a helper the haze integrator
-(:mod:`seahaze.render.haze_integrator`) holds and renders as a pass of its own. Its probes are
+:class:`VesselLightPass` is the correction, an integrator of its own on the ``physical``
+passes' shared base (:class:`seahaze.render.haze_integrator.HazeIntegrator`). Import this
+module once a Mitsuba variant is set, as that one. Its probes are
 drawn near the vessels and aimed at them (each strategy mixed with the plain one by the balance
 heuristic), because most probes from the phase function alone miss every vessel and the few
 that meet a sunlit hull speckle the sky; :mod:`seahaze.render.physical` then smooths the pass
@@ -22,26 +23,25 @@ from __future__ import annotations
 
 from typing import Any
 
+import drjit as dr
+import mitsuba as mi
 import numpy as np
 
 from . import jit_haze
+from .haze_integrator import HazeIntegrator
 from .haze_path import HazePath
 
-NEAR_SHARE = 0.5
-"""The share of probe points drawn near a vessel (the rest from the levels' mixture;
-:meth:`VesselLight.probe_point`)."""
-AIM_SHARE = 0.5
-"""The share of probes aimed at a vessel's bounding sphere (the rest follow the phase
-function; :meth:`VesselLight.probe_direction`)."""
 
+class VesselLightPass(HazeIntegrator):
+    """The vessel-light pass: each level's correction for the light the vessels send into the
+    haze in front of them (see the module docstring; its clean radiance is 0). Built from the
+    shared base's pieces: the lights and shading at the vessel, and the open-sea segment the
+    tables assumed (:meth:`open_sea_bounce`)."""
 
-class VesselLight:
-    """The vessel-light pass of haze integrator ``haze``, whose slab and level helpers
-    (``mixture_distance``, ``slab_length``, ``transmittance``, ``ext``, ``albedo``, ``g``) and
-    path machinery (``shade``, ``bounce``, ``follow``) it uses."""
-
-    def __init__(self, haze: Any):
-        self.haze = haze
+    def __init__(self, *args: Any, **kwargs: Any):
+        """As :class:`~seahaze.render.haze_integrator.HazeIntegrator`; the vessels are set
+        with :meth:`set_vessels`."""
+        super().__init__(*args, **kwargs)
         self.set_vessels(0, np.zeros((0, 4)))
 
     def set_vessels(self, sea_id: int, spheres: np.ndarray) -> None:
@@ -49,9 +49,6 @@ class VesselLight:
         light the haze in front of it scatters: :meth:`vessel_light`) and a sphere around
         every vessel, (n, 4) centre x, y, z and radius in metres, at which probes are aimed.
         Kernel parameters, so another scene (another fleet) reuses the compiled kernel."""
-        import drjit as dr
-        import mitsuba as mi
-
         self.sea_id = dr.opaque(mi.UInt32, int(sea_id))
         rows = np.asarray(spheres, np.float64).reshape(-1, 4)
         self.count = dr.opaque(mi.UInt32, len(rows))
@@ -60,16 +57,13 @@ class VesselLight:
         self.centre = [jit_haze.owned_floats(padded[:, axis]) for axis in range(3)]
         self.radius = jit_haze.owned_floats(padded[:, 3])
 
-    def sample(self, scene, sampler, ray, active):
+    def sample(self, scene, sampler, ray, medium=None, active=True):
         """The correction pass: :meth:`vessel_light` along the camera segment, for every
         level (no clean radiance)."""
-        import drjit as dr
-        import mitsuba as mi
-
         si = scene.ray_intersect(ray, active)
         t_end = dr.select(si.is_valid(), si.t, dr.inf)
-        enter, length = self.haze.slab_length(ray.o, ray.d, t_end)
-        res = [dr.zeros(mi.Color3f) for _ in range(self.haze.n_levels)]
+        enter, length = self.levels.segment(ray.o, ray.d, t_end)
+        res = [dr.zeros(mi.Color3f) for _ in range(self.n_levels)]
         self.vessel_light(scene, sampler, ray, enter, length, res, active & (length > 0.0))
         aovs = [c for r in res for c in (r.x, r.y, r.z)]
         return mi.Spectrum(0.0), mi.Bool(True), aovs
@@ -89,41 +83,39 @@ class VesselLight:
         toward the camera just in front of a vessel came from the vessel: a shaded hull
         against the bright haze toward the sun is darker than the open-sea field makes it
         (docs/physics.md, "Haze in front of a vessel")."""
-        import drjit as dr
-        import mitsuba as mi
-
-        haze = self.haze
+        levels = self.levels
         s, pdf = self.probe_point(ray, enter, length, sampler, active)
         x = ray(enter + s)
         d, phase_weight = self.probe_direction(x, ray.d, sampler, active)
         probe = mi.Ray3f(x, d, ray.time, ray.wavelengths)
         si = scene.ray_intersect(probe, active)
         on_vessel = active & self.is_vessel(si)
-        _, to_vessel = haze.slab_length(probe.o, d, si.t)
-        scale = haze.albedo * phase_weight / dr.maximum(pdf, 1e-30)
+        _, to_vessel = levels.segment(probe.o, d, si.t)
+        scale = levels.albedo * phase_weight / dr.maximum(pdf, 1e-30)
         start = [
-            dr.select(on_vessel, haze.ext[k] * haze.transmittance(k, s + to_vessel), 0.0) * scale
-            for k in range(haze.n_levels)
+            dr.select(on_vessel, levels.ext[k] * levels.transmittance(k, s + to_vessel), 0.0)
+            * scale
+            for k in range(self.n_levels)
         ]
 
         # Once, and only for packets where a lane met a vessel: a loop that a packet with
         # no active lane skips, where a masked block costs every lane.
         def body(res, pending, sampler):
-            seen = HazePath.start(probe, pending, haze.n_levels, haze.grey)
+            seen = HazePath.start(probe, pending, self.n_levels, self.grey)
             seen.att, seen.depth = list(start), mi.UInt32(1)
-            haze.shade(scene, sampler, seen, si)
+            self.shade(scene, sampler, seen, si)
             seen.depth += 1
             end, beyond = self.past_vessels(scene, si, d, pending)
-            assumed = HazePath.start(mi.Ray3f(si.p, d), pending, haze.n_levels, haze.grey)
+            assumed = HazePath.start(mi.Ray3f(si.p, d), pending, self.n_levels, self.grey)
             assumed.att, assumed.depth = list(start), mi.UInt32(1)
-            haze.bounce(scene, sampler, assumed, camera=False, hit=(end, beyond), free=True)
+            self.open_sea_bounce(scene, sampler, assumed, end, beyond)
             # Only one of the two paths goes on past its first vertex, each with probability
             # ½ and twice the weight (unbiased): following them is most of the pass's time,
             # and a packet runs the loop while any of its lanes goes on.
             go_seen = sampler.next_1d(pending) < 0.5
             onward = dr.select(go_seen, seen, assumed)
-            onward.res = [dr.zeros(mi.Color3f) for _ in range(haze.n_levels)]
-            onward = haze.follow(scene, sampler, onward)
+            onward.res = [dr.zeros(mi.Color3f) for _ in range(self.n_levels)]
+            onward = self.follow(scene, sampler, onward)
             sign = dr.select(go_seen, 2.0, -2.0)
             res = [
                 r + dr.select(pending, a - b + sign * o, 0.0)
@@ -150,18 +142,16 @@ class VesselLight:
         haze close in front of a vessel, which sees it large, is where its light is
         scattered toward the camera. The vessel is drawn in proportion to
         :meth:`along_ray`'s weight."""
-        import drjit as dr
-
-        haze = self.haze
+        levels = self.levels
         u = sampler.next_1d(active)
-        if NEAR_SHARE <= 0.0:  # the mixture alone: no loop over the vessels
-            return haze.mixture_distance(u, length)
+        if self.settings.near_share <= 0.0:  # the mixture alone: no loop over the vessels
+            return levels.mixture_distance(u, length)
         total, chosen, u = self.draw(lambda i: self.along_ray(i, ray, enter, length)[3], u, active)
-        near_share = dr.select(total > 0.0, NEAR_SHARE, 0.0)
+        near_share = dr.select(total > 0.0, self.settings.near_share, 0.0)
         near = u < near_share
         u = dr.select(near, u / near_share, (u - near_share) / (1.0 - near_share))
         u = dr.clip(u, 0.0, 0.99999994)
-        s_mix, _ = haze.mixture_distance(u, length)
+        s_mix, _ = levels.mixture_distance(u, length)
         closest, width, angles, _ = self.along_ray(chosen, ray, enter, length)
         s_near = closest + width * dr.tan(angles[0] + u * (angles[1] - angles[0]))
         s = dr.clip(dr.select(near, s_near, s_mix), 0.0, length)
@@ -172,7 +162,7 @@ class VesselLight:
             return w * width / (span * (width * width + dr.square(s - closest)))
 
         near_pdf = self.total(near_density, active) / dr.maximum(total, 1e-30)
-        return s, (1.0 - near_share) * haze.mixture_density(s, length) + near_share * near_pdf
+        return s, (1.0 - near_share) * levels.mixture_density(s, length) + near_share * near_pdf
 
     def along_ray(self, i, ray, enter, length):
         """Vessel ``i`` seen along the camera segment: the distance from the segment's start
@@ -181,9 +171,6 @@ class VesselLight:
         from the centre, and its weight for :meth:`probe_point`: the angle the segment
         spans (over π) times the square of radius over closest distance (1 where the ray
         goes through the sphere)."""
-        import drjit as dr
-        import mitsuba as mi
-
         centre = mi.Point3f(*(dr.gather(mi.Float, c, i) for c in self.centre))
         radius = dr.gather(mi.Float, self.radius, i)
         to = centre - ray(enter)
@@ -202,19 +189,16 @@ class VesselLight:
         Two strategies, one drawn per sample and weighted by the balance heuristic: the
         phase function around the ray ``ray_d``, and a direction uniform in the cone of one
         vessel's bounding sphere, drawn in proportion to :meth:`cone`'s weight."""
-        import drjit as dr
-        import mitsuba as mi
-
-        g = self.haze.g
+        g = self.levels.g
         u_pick = sampler.next_1d(active)
         u = sampler.next_2d(active)
         cos_hg = jit_haze.hg_sample_cos(u.x, g)
         around = (ray_d.x, ray_d.y, ray_d.z)
         phased = mi.Vector3f(*jit_haze.rotate_directions(around, cos_hg, 2.0 * dr.pi * u.y))
-        if AIM_SHARE <= 0.0:  # the phase function alone: its own density, no loop
+        if self.settings.aim_share <= 0.0:  # the phase function alone: its own density, no loop
             return phased, mi.Float(1.0)
         total, chosen, u_pick = self.draw(lambda i: self.cone(i, x, ray_d)[2], u_pick, active)
-        aim_share = dr.select(total > 0.0, AIM_SHARE, 0.0)
+        aim_share = dr.select(total > 0.0, self.settings.aim_share, 0.0)
         aimed = u_pick < aim_share
         axis, one_minus, _ = self.cone(chosen, x, ray_d)
         m = u.x * one_minus
@@ -240,9 +224,6 @@ class VesselLight:
         its weight for :meth:`probe_direction`, solid angle (sr) times the phase function
         (1/sr) at the cone's edge nearest the camera ray ``ray_d`` (its axis, where the ray is
         inside the cone)."""
-        import drjit as dr
-        import mitsuba as mi
-
         centre = mi.Point3f(*(dr.gather(mi.Float, c, i) for c in self.centre))
         radius = dr.gather(mi.Float, self.radius, i)
         to = centre - x
@@ -257,7 +238,7 @@ class VesselLight:
         sin_t = dr.sqrt(dr.maximum(1.0 - cos_t * cos_t, 0.0))
         sin_a = dr.sqrt(dr.minimum(sin2, 1.0))
         edge = dr.select(inside | (cos_t >= cos_a), 1.0, cos_t * cos_a + sin_t * sin_a)
-        weight = 2.0 * dr.pi * one_minus * jit_haze.hg_phase(edge, self.haze.g)
+        weight = 2.0 * dr.pi * one_minus * jit_haze.hg_phase(edge, self.levels.g)
         return axis, one_minus, dr.select(radius > 0.0, weight, 0.0)
 
     def draw(self, weigh, u, active):
@@ -265,9 +246,6 @@ class VesselLight:
         and ``u`` rescaled to [0, 1). One pass: each vessel replaces the choice with its
         share of the weight so far, and ``u`` is rescaled within the branch it took, so one
         number serves the draw and the next decision."""
-        import drjit as dr
-        import mitsuba as mi
-
         def body(i, total, chosen, u):
             w = weigh(i)
             total = total + w
@@ -285,9 +263,6 @@ class VesselLight:
 
     def total(self, term, active):
         """The sum of ``term(i)`` over the vessels."""
-        import drjit as dr
-        import mitsuba as mi
-
         _, total = dr.while_loop(
             (mi.UInt32(0), mi.Float(0.0)),
             lambda i, total: active & (i < self.count),
@@ -297,17 +272,11 @@ class VesselLight:
 
     def is_vessel(self, si):
         """Whether ``si`` lies on a vessel (a valid hit that is not the sea)."""
-        import drjit as dr
-        import mitsuba as mi
-
         return si.is_valid() & (dr.reinterpret_array(mi.UInt32, si.shape) != self.sea_id)
 
     def past_vessels(self, scene, si, d, active):
         """The first surface along ``d`` beyond ``si`` that is not a vessel (the sea, or
         nothing) and its distance from ``si``: the open sea behind a vessel."""
-        import drjit as dr
-        import mitsuba as mi
-
         def body(o, t, going, count):
             nxt = scene.ray_intersect(mi.Ray3f(o, d), going)
             through = going & self.is_vessel(nxt)
@@ -319,3 +288,13 @@ class VesselLight:
         o, t, _, _ = dr.while_loop(start, lambda o, t, going, count: going, body)
         end = scene.ray_intersect(mi.Ray3f(o, d), active)
         return end, dr.select(end.is_valid(), t + end.t, dr.inf)
+
+    def open_sea_bounce(self, scene, sampler, p: HazePath, si: Any, t_end: Any) -> None:
+        """One segment of path ``p`` through the open sea's haze that the tables assumed,
+        ending at ``si`` (``t_end`` metres on): no surface shades the sun from it and the
+        sun's disk is not its light (its single scattering is computed with shadow rays);
+        then the surface's lights and next direction, as the main pass's
+        :meth:`~seahaze.render.haze_integrator.HazeIntegrator.bounce`."""
+        segment, _ = self.haze_along(sampler, p, t_end, camera=False)
+        self.escape(scene, p, si, segment, mi.Color3f(0.0))
+        self.turn(scene, sampler, p, si)

@@ -1,0 +1,294 @@
+"""The haze medium: everything a renderer asks about where the haze is and how thick.
+
+Every consumer — the ``physical`` pass and its vessel-light pass, the photon tracer of the
+diffuse tables, the ``asm`` composite, the ``reference`` scene's Mitsuba medium, ``verify`` and
+the cost model — asks a :class:`HazeMedium` instead of computing with the slab itself, so that
+"what is σ here" has one answer and a new kind of haze is one new class (docs/architecture.md,
+"Adding a kind of haze").
+
+Levels and the medium
+    A pass renders several levels at once. Level ``k`` has the extinction ``σ_k`` (1/m, per
+    channel R, G, B) of its visibility (:mod:`seahaze.visibility`); the medium gives its shape,
+    a relative density ``ρ(x)`` (dimensionless), so the level's extinction at ``x`` is
+    ``σ_k ρ(x)``. The optical depth of a ray over ``[0, t]`` is then ``τ_k = σ_k ℓ`` with the
+    *reduced length* ``ℓ = ∫₀ᵗ ρ ds`` (m), one number for every level: the levels of a pass
+    share their geometry and differ only by ``σ_k``.
+
+One definition for numpy and drjit
+    The formulas are written once against :class:`ArrayOps`, the handful of array operations
+    they need; :data:`NUMPY` (float64, for ``asm``, ``verify`` and the tests) and
+    :func:`drjit_ops` (float32, traced into the ``physical`` kernels) implement them. Where the
+    two must differ (a horizontal ray is ``|d_z| < 1e-12`` in float64 but ``< 1e-7`` for
+    float32 directions) the difference is an attribute of the ops, not a second formula.
+    ``tests/reference_tracer.py`` keeps its own slab on purpose: an independent check.
+
+The homogeneous slab (:class:`HomogeneousSlab`)
+    ``ρ = 1`` for ``bottom ≤ z ≤ top`` (metres), 0 elsewhere, horizontally unbounded. A straight
+    ray ``o + s·d`` is inside it for ``s`` in one interval, and transmittance over a length
+    ``ℓ`` of it is ``exp(−σ ℓ)`` (Beer–Lambert). Its bottom lies below the sea surface
+    (:data:`HAZE_BOTTOM_M`), which hides everything beneath. The sun's single scattering along
+    a segment has a closed form there (:func:`sun_scattered_fraction`).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from functools import cache
+from typing import Any
+
+import numpy as np
+
+HAZE_BOTTOM_M = -60.0
+"""Bottom of the haze layer below sea level (m); the sea surface hides everything beneath it."""
+TINY_OPTICAL_DEPTH = 1e-3
+"""Below this, ``1 − e^{−τ}`` is evaluated by its series (float32 cancellation)."""
+
+
+@dataclass(frozen=True)
+class ArrayOps:
+    """The array operations the medium's formulas use, for one array library."""
+
+    exp: Callable[[Any], Any]
+    log: Callable[[Any], Any]
+    abs: Callable[[Any], Any]
+    minimum: Callable[[Any, Any], Any]
+    maximum: Callable[[Any, Any], Any]
+    select: Callable[[Any, Any, Any], Any]
+    divide: Callable[[Any, Any], Any]
+    inf: float
+    flat_dz: float
+    """A ray with ``|d_z|`` below this is horizontal for a layer (the directions' precision)."""
+
+
+def _numpy_divide(a: Any, b: Any) -> Any:
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.divide(a, b)
+
+
+NUMPY = ArrayOps(
+    exp=np.exp,
+    log=np.log,
+    abs=np.abs,
+    minimum=np.minimum,
+    maximum=np.maximum,
+    select=np.where,
+    divide=_numpy_divide,
+    inf=np.inf,
+    flat_dz=1e-12,
+)
+"""numpy, float64: the ``asm`` composite, ``verify`` and tests."""
+
+
+@cache
+def drjit_ops() -> ArrayOps:
+    """drjit (the active Mitsuba variant's arrays, float32): traced into the kernels. A
+    division is a multiplication by the reciprocal, which drjit's value numbering computes once
+    for the several numerators of one denominator."""
+    import drjit as dr
+
+    return ArrayOps(
+        exp=dr.exp,
+        log=dr.log,
+        abs=dr.abs,
+        minimum=dr.minimum,
+        maximum=dr.maximum,
+        select=dr.select,
+        divide=lambda a, b: a * dr.rcp(b),
+        inf=dr.inf,
+        flat_dz=1e-7,
+    )
+
+
+def one_minus_exp(tau: Any, ops: ArrayOps) -> Any:
+    """``1 − e^{−τ}``, accurate for small ``τ`` (its series below :data:`TINY_OPTICAL_DEPTH`)
+    and 1 for ``τ = ∞``."""
+    return ops.select(tau < TINY_OPTICAL_DEPTH, tau * (1.0 - 0.5 * tau), 1.0 - ops.exp(-tau))
+
+
+def transmittance(sigma: Any, length: Any, ops: ArrayOps) -> Any:
+    """Beer–Lambert transmittance ``exp(−σ ℓ)`` of extinction ``sigma`` (1/m, per level; grey
+    or RGB) over reduced length ``length`` (m). Written as ``exp(−(σ ℓ))``, as
+    :func:`one_minus_exp` is, so that the two share one exponential in a kernel."""
+    return ops.exp(-(sigma * length))
+
+
+def distance_in_mass(u: Any, sigma: Any, inv_sigma: Any, mass: Any, length: Any, ops: ArrayOps):
+    """The reduced distance in ``[0, length]`` at which a fraction ``u`` (0–1) of a level's
+    scattering mass ``mass = 1 − e^{−σ ℓ}`` lies: distances drawn with uniform ``u`` follow the
+    level's transmittance, density ``σ e^{−σ s} / mass`` (1/m). ``inv_sigma`` is ``1/σ``."""
+    return ops.minimum(-ops.log(ops.maximum(1.0 - u * mass, 1e-30)) * inv_sigma, length)
+
+
+def sun_scattered_fraction(
+    sigma: Any, near: Any, e_start: Any, climb: Any, inv_climb: Any, length: Any, ops: ArrayOps
+) -> Any:
+    """In a homogeneous medium, ``σ ∫₀^ℓ e^{−(τ₀ + σ c s)} ds``: per unit of the sun's
+    source, the light scattered toward a segment's start by its first ``length`` metres, each
+    point's light attenuated on its way from the sun and on to the start. At distance ``s``
+    the two paths have optical depth ``τ₀ + σ c s``: ``τ₀ = e_start`` toward the sun from the
+    start (``near`` = ``e^{−τ₀}``), plus ``σ s`` back to the start, less ``σ s d_z / μ_sun``
+    toward the sun (``c = climb = 1 − d_z / μ_sun``, negative where the segment climbs more
+    steeply than the sun). In closed form ``(near − e^{−(τ₀ + σ c ℓ)}) / c``, by its series
+    where ``σ c ℓ`` is too small for float32. ``inv_climb`` = ``1 / c``, computed once for
+    every level; ``sigma`` may be RGB."""
+    x = sigma * climb * length
+    far = ops.exp(-ops.maximum(e_start + x, 0.0))  # τ at the end is >= 0: never overflows
+    series = sigma * near * length * (1.0 - 0.5 * x)
+    return ops.select(ops.abs(x) < TINY_OPTICAL_DEPTH, series, (near - far) * inv_climb)
+
+
+class HazeMedium(ABC):
+    """What a renderer asks of a haze: its shape as a relative density ``ρ`` (the levels scale
+    it by their ``σ_k``), its bounds, reduced lengths along rays, and its single-scattering
+    albedo and Henyey–Greenstein asymmetry ``g``. Methods take the arrays' :class:`ArrayOps`;
+    positions and lengths are in metres."""
+
+    albedo: float
+    """Single-scattering albedo (0–1)."""
+    g: float
+    """Henyey–Greenstein asymmetry of the phase function (−1–1)."""
+
+    @property
+    @abstractmethod
+    def bottom_m(self) -> float:
+        """Lowest height (m) where ``ρ`` may be non-zero."""
+
+    @property
+    @abstractmethod
+    def top_m(self) -> float:
+        """Highest height (m) where ``ρ`` may be non-zero; the diffuse tables span ``[0, top]``."""
+
+    @property
+    @abstractmethod
+    def is_homogeneous(self) -> bool:
+        """Whether ``ρ`` is 1 wherever it is not 0 (closed forms hold along a ray)."""
+
+    @abstractmethod
+    def density(self, z: Any, ops: ArrayOps) -> Any:
+        """The relative density ``ρ`` (dimensionless) at height ``z`` (m)."""
+
+    @abstractmethod
+    def span(self, oz: Any, dz: Any, ops: ArrayOps) -> tuple[Any, Any]:
+        """Ray parameters ``[enter, leave]`` (m, ``enter ≥ 0``) of ``o + s·d`` between the
+        medium's bounds (only heights matter: ``oz``, ``dz`` are the ray's z components);
+        ``leave < enter`` where the ray never enters, ``leave = ∞`` along a horizontal ray
+        inside."""
+
+    @abstractmethod
+    def reduced_length(self, oz: Any, dz: Any, t_end: Any, ops: ArrayOps) -> tuple[Any, Any]:
+        """Where the ray ``o + s·d`` enters the medium (m) and its reduced length ``∫ρ ds`` (m)
+        up to ``t_end`` (``∞``: to the end of the medium): a level's optical depth over it
+        is ``σ_k`` times that."""
+
+    @abstractmethod
+    def depth_toward_sun(self, z: Any, mu_sun: Any, ops: ArrayOps) -> Any:
+        """The reduced length (m) from height ``z`` toward a sun of elevation cosine
+        ``mu_sun > 0`` (straight out of the medium's top)."""
+
+    @abstractmethod
+    def mitsuba_medium(self, box_min: np.ndarray, box_max: np.ndarray) -> dict[str, Any]:
+        """The medium as a Mitsuba plugin dict filling the ``reference`` mode's haze box
+        (world corners ``box_min``, ``box_max`` in m), its extinction 0 until a level sets it
+        (:meth:`mitsuba_level`)."""
+
+    @abstractmethod
+    def mitsuba_level(self, sigma_rgb: np.ndarray, albedo: float, g: float) -> dict[str, Any]:
+        """The Mitsuba scene parameters, by name below the medium's id, that make
+        :meth:`mitsuba_medium` the level of extinction ``sigma_rgb`` (1/m, R, G, B) with
+        ``albedo`` and ``g`` (a ``σ = 0`` level: no haze)."""
+
+    def path_length(self, origin_z: float, dirs_z: np.ndarray, distance_m: np.ndarray):
+        """numpy: the reduced length (m) of each ray from a camera at height ``origin_z`` with
+        direction z components ``dirs_z`` up to its surface ``distance_m`` (``inf``: the sky).
+        The per-pixel optical depth of level ``k`` is ``σ_k`` times it (the ``asm`` mode)."""
+        dz = np.asarray(dirs_z, dtype=np.float64)
+        oz = np.full_like(dz, float(origin_z))
+        _, length = self.reduced_length(oz, dz, np.asarray(distance_m, np.float64), NUMPY)
+        return np.maximum(length, 0.0)
+
+    def with_optics(self, albedo: float, g: float) -> HazeMedium:
+        """The same shape with another single-scattering ``albedo`` and asymmetry ``g``
+        (a dataclass medium gets this for free; another must override it)."""
+        return replace(self, albedo=float(albedo), g=float(g))  # type: ignore[type-var]
+
+    def describe(self) -> dict[str, Any]:
+        """The medium as plain data for a dataset's ``meta`` and ``dataset.json``."""
+        return {"kind": type(self).__name__, "albedo": self.albedo, "g": self.g}
+
+
+@dataclass(frozen=True)
+class HomogeneousSlab(HazeMedium):
+    """A homogeneous layer ``bottom ≤ z ≤ top`` (m), horizontally unbounded (see the module
+    docstring)."""
+
+    top: float
+    albedo: float = 0.998
+    g: float = 0.75
+    bottom: float = HAZE_BOTTOM_M
+
+    def __post_init__(self) -> None:
+        if not self.top > self.bottom:
+            raise ValueError(f"the slab's top ({self.top} m) must lie above its bottom")
+
+    @property
+    def bottom_m(self) -> float:
+        return self.bottom
+
+    @property
+    def top_m(self) -> float:
+        return self.top
+
+    @property
+    def is_homogeneous(self) -> bool:
+        return True
+
+    def density(self, z: Any, ops: ArrayOps) -> Any:
+        return ops.select((z >= self.bottom) & (z <= self.top), 1.0, 0.0)
+
+    def span(self, oz: Any, dz: Any, ops: ArrayOps) -> tuple[Any, Any]:
+        s_bottom = ops.divide(self.bottom - oz, dz)
+        s_top = ops.divide(self.top - oz, dz)
+        flat = ops.abs(dz) < ops.flat_dz
+        inside = (oz >= self.bottom) & (oz <= self.top)
+        inf = ops.inf
+        enter = ops.select(flat, ops.select(inside, 0.0, inf), ops.minimum(s_bottom, s_top))
+        leave = ops.select(flat, ops.select(inside, inf, -inf), ops.maximum(s_bottom, s_top))
+        return ops.maximum(enter, 0.0), leave
+
+    def reduced_length(self, oz: Any, dz: Any, t_end: Any, ops: ArrayOps) -> tuple[Any, Any]:
+        enter, leave = self.span(oz, dz, ops)
+        if t_end is not None:
+            leave = ops.minimum(leave, t_end)
+        return enter, ops.maximum(leave - enter, 0.0)
+
+    def depth_toward_sun(self, z: Any, mu_sun: Any, ops: ArrayOps) -> Any:
+        return ops.maximum(self.top - z, 0.0) / mu_sun
+
+    def mitsuba_medium(self, box_min: np.ndarray, box_max: np.ndarray) -> dict[str, Any]:
+        return {
+            "type": "homogeneous",
+            # RGB so that the extinction may differ per channel (haze.extinction_spectrum).
+            "sigma_t": {"type": "rgb", "value": [0.0, 0.0, 0.0]},
+            "albedo": self.albedo,
+            "phase": {"type": "hg", "g": self.g},
+        }
+
+    def mitsuba_level(self, sigma_rgb: np.ndarray, albedo: float, g: float) -> dict[str, Any]:
+        import mitsuba as mi
+
+        return {
+            "sigma_t.value.value": mi.Color3f(*(float(c) for c in sigma_rgb)),
+            "albedo.value.value": albedo,
+            "phase_function.g": g,
+        }
+
+    def describe(self) -> dict[str, Any]:
+        return {**super().describe(), "bottom_m": self.bottom, "top_m": self.top}
+
+
+def haze_medium(haze: Any) -> HazeMedium:
+    """The medium a scene's ``haze`` section (:class:`seahaze.spec.HazeSpec`) describes: a
+    homogeneous slab from :data:`HAZE_BOTTOM_M` to ``haze.top_m``."""
+    return HomogeneousSlab(top=float(haze.top_m), albedo=float(haze.albedo), g=float(haze.g))

@@ -1,0 +1,168 @@
+"""The levels of one ``physical`` pass as kernel parameters, and the medium asked for each.
+
+A pass renders ``L`` levels of one :class:`~seahaze.medium.HazeMedium` at once; level ``k``
+scales the medium by its extinction ``σ_k``. :class:`PassLevels` holds what the kernels read per
+level — ``σ_k``, the mixture the shared in-scattering points are drawn from, the diffuse tables
+— as opaque drjit values, so that another scene or set of levels reuses the compiled kernel,
+and answers the integrators' per-level questions (transmittance, distances drawn in proportion
+to it, the sun's single scattering along a segment) through the medium's formulas.
+
+Every answer here is for a homogeneous medium, whose optical depth along a segment is ``σ_k``
+times its reduced length; a medium that is not (``is_homogeneous`` false) is refused when the
+levels are set, with the documented place to add its estimators (docs/architecture.md).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..medium import (
+    HazeMedium,
+    distance_in_mass,
+    drjit_ops,
+    one_minus_exp,
+    sun_scattered_fraction,
+    transmittance,
+)
+from . import jit_haze
+from .table_texture import TableTexture
+
+
+class PassLevels:
+    """The levels of one pass (see the module docstring). ``grey`` levels have one
+    extinction for R, G and B: their transmittances are one exponential, not three."""
+
+    def __init__(self, medium: HazeMedium, n_levels: int, grey: bool):
+        if not medium.is_homogeneous:
+            raise NotImplementedError(
+                f"the physical mode renders homogeneous media; {type(medium).__name__} is not "
+                "(docs/architecture.md, 'Adding a kind of haze')"
+            )
+        self.medium, self.n_levels, self.grey = medium, n_levels, grey
+        self.ops = drjit_ops()
+        self.set(
+            np.full((n_levels, 3), 1e-3),
+            np.full(n_levels, 1.0 / n_levels),
+            0.998,
+            0.0,
+            np.zeros((2, 2, 2, 3 * n_levels), np.float32),
+            0.0,
+        )
+
+    def set(
+        self,
+        sigma: np.ndarray,
+        mixture: np.ndarray,
+        albedo: float,
+        g: float,
+        tables: np.ndarray,
+        sun_azimuth_rad: float,
+    ) -> None:
+        """Point the kernels at a set of levels without changing them.
+
+        ``sigma`` (L, 3) extinction per level and channel (1/m, > 0), ``mixture`` (L,) the
+        distance-sampling weights (sum 1), ``albedo`` and ``g`` the medium's, ``tables``
+        (n_z, n_mu, n_phi, 3L) the diffuse in-scattering of every level, channels
+        ``3k..3k+2`` for level ``k``; ``sun_azimuth_rad`` orients the tables' azimuth.
+        """
+        import drjit as dr
+        import mitsuba as mi
+
+        if sigma.shape != (self.n_levels, 3) or tables.shape[-1] != 3 * self.n_levels:
+            raise ValueError(f"this pass renders {self.n_levels} levels")
+        opaque = lambda x: dr.opaque(mi.Float, float(x))  # noqa: E731
+        self.sigma = [mi.Color3f(*(opaque(c) for c in row)) for row in sigma]
+        # Green's extinction (distances follow it) and, per level, the extinction the
+        # transmittances use: green's own for grey levels (one exponential, not three).
+        # Green's reciprocal is a parameter too: the diffuse points divide by nothing.
+        self.sg = [row.y for row in self.sigma]
+        self.inv_sg = [opaque(1.0 / row[1]) for row in sigma]
+        self.ext = self.sg if self.grey else self.sigma
+        # Per-level arrays are padded (jit_haze.padded_floats): one kernel for any count.
+        self.sigma_g = jit_haze.padded_floats(sigma[:, 1])
+        weights = np.asarray(mixture, np.float64) / np.sum(mixture)
+        self.mix_weight = [opaque(w) for w in weights]
+        self.mix_start = jit_haze.padded_floats(np.concatenate([[0.0], np.cumsum(weights)[:-1]]))
+        self.mix_width = jit_haze.padded_floats(weights)
+        self.mix_bounds = [opaque(b) for b in np.cumsum(weights)[:-1]]
+        self.albedo, self.g = opaque(albedo), opaque(g)
+        self.sun_cos_az, self.sun_sin_az = (opaque(f(sun_azimuth_rad)) for f in (np.cos, np.sin))
+        self.table = TableTexture(tables, self.n_levels)
+
+    # -- where the medium is along a ray ----------------------------------------------------
+    def segment(self, p: Any, d: Any, t_end: Any = None) -> tuple[Any, Any]:
+        """Where ``p + s d`` enters the medium and its reduced length up to ``t_end`` (m)."""
+        return self.medium.reduced_length(p.z, d.z, t_end, self.ops)
+
+    def transmittance(self, k: int, length: Any) -> Any:
+        """Level ``k``'s transmittance over reduced length ``length``: a Float for grey
+        levels, RGB otherwise."""
+        return transmittance(self.ext[k], length, self.ops)
+
+    def depth_toward_sun(self, z: Any, mu_sun: Any) -> Any:
+        """The reduced length (m) from height ``z`` out of the medium toward the sun."""
+        return self.medium.depth_toward_sun(z, mu_sun, self.ops)
+
+    # -- distances along a segment ----------------------------------------------------------
+    def mass(self, k: int, length: Any) -> Any:
+        """Level ``k``'s scattering mass ``1 − e^{−σ ℓ}`` (green) over ``length``."""
+        return one_minus_exp(self.sg[k] * length, self.ops)
+
+    def own_distance(self, k: int, u: Any, mass: Any, length: Any) -> Any:
+        """A distance drawn in proportion to level ``k``'s own (green) transmittance for
+        uniform ``u``; ``mass``: :meth:`mass` over ``length``."""
+        return distance_in_mass(u, self.sg[k], self.inv_sg[k], mass, length, self.ops)
+
+    def mixture_distance(self, u: Any, length: Any) -> tuple[Any, Any]:
+        """A distance in ``[0, length]`` from the levels' mixture for uniform ``u``, and the
+        mixture density there. The component is chosen by ``u`` and ``u`` is rescaled within
+        it, so stratified ``u`` stratify both the component and the distance."""
+        import drjit as dr
+        import mitsuba as mi
+
+        j = mi.UInt32(0)
+        for bound in self.mix_bounds:
+            j += mi.UInt32(u >= bound)
+        start = dr.gather(mi.Float, self.mix_start, j)
+        width = dr.gather(mi.Float, self.mix_width, j)
+        u_in = dr.clip((u - start) / width, 0.0, 0.99999994)
+        sigma = dr.gather(mi.Float, self.sigma_g, j)
+        mass = one_minus_exp(sigma * length, self.ops)
+        s = -dr.log(dr.maximum(1.0 - u_in * mass, 1e-30)) / sigma
+        s = dr.minimum(s, length)
+        return s, self.mixture_density(s, length)
+
+    def mixture_density(self, s: Any, length: Any) -> Any:
+        """The density (1/m) of :meth:`mixture_distance` at distance ``s``."""
+        import drjit as dr
+        import mitsuba as mi
+
+        pdf = mi.Float(0.0)
+        for k in range(self.n_levels):
+            norm = self.mass(k, length)
+            density = self.sg[k] * dr.exp(-(self.sg[k] * s)) / dr.maximum(norm, 1e-30)
+            pdf += self.mix_weight[k] * density
+        return pdf
+
+    # -- the sun's single scattering along a segment ----------------------------------------
+    def sun_scattered(self, k: int, near_k: Any, depth: Any, climb: Any, length: Any) -> Any:
+        """Level ``k``'s sun-scattered fraction over ``length`` metres of a segment entering
+        the medium ``depth`` metres (reduced) below its top along the sun, whose depth toward
+        the sun grows by ``climb`` (``1 − d_z / μ_sun``) per metre
+        (:func:`seahaze.medium.sun_scattered_fraction`); ``near_k``: the
+        level's transmittance over that depth, if already known (None computes it)."""
+        import drjit as dr
+
+        e_start = self.ext[k] * depth
+        near = dr.exp(-e_start) if near_k is None else near_k
+        # The same 1 / climb for every level: drjit's value numbering keeps one division.
+        return sun_scattered_fraction(
+            self.ext[k], near, e_start, climb, 1.0 / climb, length, self.ops
+        )
+
+    def sun_scattered_at(self, k: int, depth: Any, climb: Any, s: Any) -> Any:
+        """The integrand of :meth:`sun_scattered` at distance ``s`` (1/m): level ``k``'s
+        ``σ e^{−σ (depth + climb s)}``, the light scattered there per unit of source."""
+        return self.ext[k] * self.transmittance(k, depth + climb * s)
