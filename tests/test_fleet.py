@@ -196,5 +196,5 @@ def test_vessel_bsdfs_are_loaded_once_and_only_the_last_set_is_kept() -> None:
     assert not any(a is b for a, b in zip(first, black, strict=True))
     # The painted set was dropped: drjit would trace every live BSDF into the black scene's
     # kernel otherwise.
-    assert len(fleet._LOADED) == len(ROUGHNESS_CLASSES)
-    assert {key[2] for key in fleet._LOADED} == {True}
+    assert len(fleet.kept_bsdf_keys()) == len(ROUGHNESS_CLASSES)
+    assert {key[2] for key in fleet.kept_bsdf_keys()} == {True}

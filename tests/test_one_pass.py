@@ -94,7 +94,7 @@ def test_tracer_is_deterministic_and_zero_without_sources() -> None:
 class _Scene:
     """A small scene: flat sea, a box vessel at 400 m, sky; loaded for the physical mode."""
 
-    def __init__(self) -> None:
+    def __init__(self, settings: EstimatorSettings | None = None) -> None:
         self.spec = small_spec(
             camera={"resolution": [48, 27], "fov_deg": 40.0, "pitch_deg": -3.0},
             haze={"levels": list(LEVELS)},
@@ -102,7 +102,8 @@ class _Scene:
         vessel = box_vessel(0, (400.0, 30.0, 6.0), (40.0, 8.0, 12.0))
         self.loaded, _ = load_flat_scene(self.spec, [vessel], LEVELS, haze_box=False)
         self.geo = passes.render_geometry(self.loaded)
-        self.renderer = physical.PhysicalRenderer(self.loaded, self.spec)
+        settings = settings or EstimatorSettings()
+        self.renderer = physical.PhysicalRenderer(self.loaded, self.spec, settings)
         sky = np.isinf(self.geo.distance_m)
         self.regions = {
             "sky": sky,
@@ -204,14 +205,12 @@ def test_hazy_noise_follows_the_clean_noise_near_the_camera() -> None:
     assert abs(independent[0, 1]) < 0.15, independent
 
 
-def test_levels_split_over_passes_give_the_same_images(
-    scene: _Scene, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_levels_split_over_passes_give_the_same_images(scene: _Scene) -> None:
     sigmas = scene.sigmas()
     one = scene.render(sigmas, 8, 5)
-    monkeypatch.setattr(physical, "MAX_LEVELS_PER_PASS", 2)
-    assert physical.levels_per_pass(48, 27, 3) == 2
-    split = scene.render(sigmas, 8, 5)
+    assert physical.levels_per_pass(48, 27, 3, most=2) == 2
+    in_twos = _Scene(EstimatorSettings(max_levels_per_pass=2))
+    split = in_twos.render(sigmas, 8, 5)
     # The surfaces and the clean image come from the same random numbers in every pass.
     np.testing.assert_array_equal(one.clean, split.clean)
     for a, b in zip(one.levels, split.levels, strict=True):
@@ -221,7 +220,7 @@ def test_levels_split_over_passes_give_the_same_images(
 
 def test_levels_per_pass_keeps_the_film_within_its_budget() -> None:
     assert physical.levels_per_pass(1280, 720, 11) == 11
-    assert physical.levels_per_pass(1280, 720, 30) == physical.MAX_LEVELS_PER_PASS
+    assert physical.levels_per_pass(1280, 720, 30) == EstimatorSettings().max_levels_per_pass
     n = physical.levels_per_pass(4096, 4096, 11)
     assert 1 <= n < 11
     assert 4 * 4096 * 4096 * (2 * 3 * n + 2 * 4) <= physical.FILM_BUDGET_BYTES

@@ -434,9 +434,11 @@ def test_frames_reuse_their_vessel_models_and_build_the_same_bytes(which, monkey
 
     monkeypatch.setattr(library, "build_vessel", counting)
 
-    def frames() -> list:
+    def frames(fresh: bool = False) -> list:
         out = []
         for frame in range(3):
+            if fresh:  # no reuse: each frame builds afresh
+                library.clear_model_cache()
             camera = frame_camera(spec, frame)
             geometry = build_geometry(spec, camera, frame)
             fields = [
@@ -446,14 +448,13 @@ def test_frames_reuse_their_vessel_models_and_build_the_same_bytes(which, monkey
             out.append((geometry.digest(), fields))
         return out
 
-    library.clear_model_cache()
-    monkeypatch.setattr(library, "MODEL_CACHE_SIZE", 0)  # no reuse: each frame builds afresh
-    cold = frames()
+    cold = frames(fresh=True)
     n_vessels = len(cold[0][1])
     assert n_vessels >= 2 and len(built) == 3 * n_vessels
     monkeypatch.undo()
     monkeypatch.setattr(library, "build_vessel", counting)
     built.clear()
+    library.clear_model_cache()
     warm = frames()
     assert warm == cold  # every mesh, material and dimension bit for bit
     assert len(built) == n_vessels  # the first frame built them, the others reused them

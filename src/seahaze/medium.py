@@ -9,10 +9,21 @@ the cost model — asks a :class:`HazeMedium` instead of computing with the slab
 Levels and the medium
     A pass renders several levels at once. Level ``k`` has the extinction ``σ_k`` (1/m, per
     channel R, G, B) of its visibility (:mod:`seahaze.visibility`); the medium gives its shape,
-    a relative density ``ρ(x)`` (dimensionless), so the level's extinction at ``x`` is
-    ``σ_k ρ(x)``. The optical depth of a ray over ``[0, t]`` is then ``τ_k = σ_k ℓ`` with the
-    *reduced length* ``ℓ = ∫₀ᵗ ρ ds`` (m), one number for every level: the levels of a pass
-    share their geometry and differ only by ``σ_k``.
+    a relative density ``ρ(z)`` (dimensionless) that varies with height alone, so the level's
+    extinction at ``x`` is ``σ_k ρ(z)``. The optical depth of a ray over ``[0, t]`` is then
+    ``τ_k = σ_k ℓ`` with the *reduced length* ``ℓ = ∫₀ᵗ ρ ds`` (m), one number for every
+    level: the levels of a pass share their geometry and differ only by ``σ_k``.
+
+A vertical profile is a homogeneous slab in reduced height
+    Measure height by the *reduced height* ``h(z) = ∫₀ᶻ ρ dz'`` (m; 0 at the sea). Along a
+    straight ray ``dℓ = ρ ds`` and ``dh = ρ dz = d_z dℓ``: in (reduced length, reduced height)
+    a ray is a straight line with the same direction cosine, and every medium of this interface
+    is the homogeneous slab ``h ≤ H = h(top)`` of extinction ``σ_k``. So the ``physical``
+    mode's closed forms (transmittance, in-scattering drawn along reduced length, the sun's
+    single scattering with a depth toward the sun ``(H − h)/μ_sun``) and its diffuse tables
+    (traced in the slab of height ``H``, looked up at ``h/H``) hold exactly for any profile; a
+    point at reduced distance ``ℓ`` is found by :meth:`HazeMedium.distance_at`. A medium that
+    also varies horizontally (patches, banks) is not of this kind.
 
 One definition for numpy and drjit
     The formulas are written once against :class:`ArrayOps`, the handful of array operations
@@ -124,15 +135,16 @@ def distance_in_mass(u: Any, sigma: Any, inv_sigma: Any, mass: Any, length: Any,
 def sun_scattered_fraction(
     sigma: Any, near: Any, e_start: Any, climb: Any, inv_climb: Any, length: Any, ops: ArrayOps
 ) -> Any:
-    """In a homogeneous medium, ``σ ∫₀^ℓ e^{−(τ₀ + σ c s)} ds``: per unit of the sun's
-    source, the light scattered toward a segment's start by its first ``length`` metres, each
-    point's light attenuated on its way from the sun and on to the start. At distance ``s``
-    the two paths have optical depth ``τ₀ + σ c s``: ``τ₀ = e_start`` toward the sun from the
-    start (``near`` = ``e^{−τ₀}``), plus ``σ s`` back to the start, less ``σ s d_z / μ_sun``
-    toward the sun (``c = climb = 1 − d_z / μ_sun``, negative where the segment climbs more
-    steeply than the sun). In closed form ``(near − e^{−(τ₀ + σ c ℓ)}) / c``, by its series
-    where ``σ c ℓ`` is too small for float32. ``inv_climb`` = ``1 / c``, computed once for
-    every level; ``sigma`` may be RGB."""
+    """In a homogeneous slab (so in any medium, in reduced length and height),
+    ``σ ∫₀^ℓ e^{−(τ₀ + σ c s)} ds``: per unit of the sun's source, the light scattered toward
+    a segment's start by its first ``length`` metres, each point's light attenuated on its way
+    from the sun and on to the start. At distance ``s`` the two paths have optical depth
+    ``τ₀ + σ c s``: ``τ₀ = e_start`` toward the sun from the start (``near`` = ``e^{−τ₀}``),
+    plus ``σ s`` back to the start, less ``σ s d_z / μ_sun`` toward the sun
+    (``c = climb = 1 − d_z / μ_sun``, negative where the segment climbs more steeply than the
+    sun). In closed form ``(near − e^{−(τ₀ + σ c ℓ)}) / c``, by its series where ``σ c ℓ`` is
+    too small for float32. ``inv_climb`` = ``1 / c``, computed once for every level;
+    ``sigma`` may be RGB."""
     x = sigma * climb * length
     far = ops.exp(-ops.maximum(e_start + x, 0.0))  # τ at the end is >= 0: never overflows
     series = sigma * near * length * (1.0 - 0.5 * x)
@@ -162,8 +174,26 @@ class HazeMedium(ABC):
 
     @property
     @abstractmethod
-    def is_homogeneous(self) -> bool:
-        """Whether ``ρ`` is 1 wherever it is not 0 (closed forms hold along a ray)."""
+    def reduced_is_geometric(self) -> bool:
+        """Whether ``ρ`` is 1 wherever it is not 0: reduced lengths are lengths, so a
+        distance drawn in metres (the vessel-light pass's probes near a vessel) needs no
+        conversion."""
+
+    @property
+    @abstractmethod
+    def reduced_top_m(self) -> float:
+        """``H = h(top)`` (m): the height of the homogeneous slab the medium is in reduced
+        height (module docstring)."""
+
+    @abstractmethod
+    def reduced_height(self, z: Any, ops: ArrayOps) -> Any:
+        """The reduced height ``h(z) = ∫₀ᶻ ρ dz'`` (m) of height ``z`` (m)."""
+
+    @abstractmethod
+    def distance_at(self, oz: Any, dz: Any, enter: Any, reduced: Any, ops: ArrayOps) -> Any:
+        """The ray parameter (m from the ray's origin at height ``oz``, direction z component
+        ``dz``) of the point ``reduced`` metres of reduced length past its entry at ``enter``
+        (m; :meth:`span`)."""
 
     @abstractmethod
     def density(self, z: Any, ops: ArrayOps) -> Any:
@@ -182,10 +212,10 @@ class HazeMedium(ABC):
         up to ``t_end`` (``∞``: to the end of the medium): a level's optical depth over it
         is ``σ_k`` times that."""
 
-    @abstractmethod
-    def depth_toward_sun(self, z: Any, mu_sun: Any, ops: ArrayOps) -> Any:
-        """The reduced length (m) from height ``z`` toward a sun of elevation cosine
-        ``mu_sun > 0`` (straight out of the medium's top)."""
+    def depth_toward_sun(self, h: Any, mu_sun: Any, ops: ArrayOps) -> Any:
+        """The reduced length (m) from reduced height ``h`` out of the medium's top toward a
+        sun of elevation cosine ``mu_sun > 0``: ``(H − h)/μ_sun``."""
+        return ops.maximum(self.reduced_top_m - h, 0.0) / mu_sun
 
     @abstractmethod
     def mitsuba_medium(self, box_min: np.ndarray, box_max: np.ndarray) -> dict[str, Any]:
@@ -241,8 +271,18 @@ class HomogeneousSlab(HazeMedium):
         return self.top
 
     @property
-    def is_homogeneous(self) -> bool:
+    def reduced_is_geometric(self) -> bool:
         return True
+
+    @property
+    def reduced_top_m(self) -> float:
+        return self.top
+
+    def reduced_height(self, z: Any, ops: ArrayOps) -> Any:
+        return z  # ρ = 1 from the bottom (below the sea) to the top: h = z
+
+    def distance_at(self, oz: Any, dz: Any, enter: Any, reduced: Any, ops: ArrayOps) -> Any:
+        return enter + reduced
 
     def density(self, z: Any, ops: ArrayOps) -> Any:
         return ops.select((z >= self.bottom) & (z <= self.top), 1.0, 0.0)
@@ -262,9 +302,6 @@ class HomogeneousSlab(HazeMedium):
         if t_end is not None:
             leave = ops.minimum(leave, t_end)
         return enter, ops.maximum(leave - enter, 0.0)
-
-    def depth_toward_sun(self, z: Any, mu_sun: Any, ops: ArrayOps) -> Any:
-        return ops.maximum(self.top - z, 0.0) / mu_sun
 
     def mitsuba_medium(self, box_min: np.ndarray, box_max: np.ndarray) -> dict[str, Any]:
         return {

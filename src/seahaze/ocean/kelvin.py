@@ -94,7 +94,7 @@ def wake_length_m(length_m: float, speed_m_s: float, gravity: float = GRAVITY) -
     return min(wanted, MAX_WAKE_LENGTH_M)
 
 
-def _shape_transform(k: np.ndarray, half_length: float, power: int) -> np.ndarray:
+def hull_shape_transform(k: np.ndarray, half_length: float, power: int) -> np.ndarray:
     """``∫ (1 - s^power)·exp(-i·k·a·s)·a ds`` over ``s in [-1, 1]`` (``a = half_length``), the
     Fourier transform of one factor of the hull shape (real: the shape is even)."""
     s = _GAUSS_NODES
@@ -177,8 +177,8 @@ def _solve_waves(
     # continuous transform into grid values. Both factors separate in kx and ky, and are
     # computed in double precision; the 2-D products below in single precision (half the
     # time), as the transform is: the field's own accuracy is far coarser.
-    row = _shape_transform(kx, 0.5 * length_m, 4) * np.exp(1j * kx * origin[0])
-    col = _shape_transform(ky, 0.5 * beam_m, 2) * np.exp(1j * ky * origin[1])
+    row = hull_shape_transform(kx, 0.5 * length_m, 4) * np.exp(1j * kx * origin[0])
+    col = hull_shape_transform(ky, 0.5 * beam_m, 2) * np.exp(1j * ky * origin[1])
     w2 = (u * kx + 1j * mu) ** 2
     k = np.hypot(kx[None, :], ky[:, None]).astype(np.float32)
     # The displacement is spread evenly over the draft, each layer at depth z radiating with

@@ -212,6 +212,8 @@ class ShipWaves:
         self.spacing_m = grid.spacing_m
         self.origin = grid.origin
         self.shape = grid.height.shape
+        self.grid = grid
+        """The solved wave grid, shared by every vessel of this hull and speed."""
         self._height, self._slope = grid.height, grid.slope
         self._breaking_box = grid.breaking_box
 

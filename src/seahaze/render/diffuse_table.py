@@ -1,11 +1,13 @@
-"""The diffuse light of a horizontally homogeneous haze slab, tabulated once per level.
+"""The diffuse light of a horizontally homogeneous haze, tabulated once per level.
 
 The ``physical`` mode splits the light scattered toward the camera at a point of the haze into
 two parts. *Single scattering* of the sun and sky (light that reached the point straight from
 the emitter) is computed per pixel with shadow rays (:mod:`seahaze.render.physical`). Everything
 else — light scattered two or more times, and light reflected by the sea — is the *diffuse
-field*. In a slab that is horizontally homogeneous it depends only on height and direction, so
-it is computed here once per level by plane-parallel Monte Carlo and looked up per pixel.
+field*. In a haze that is horizontally homogeneous it depends only on height and direction, so
+it is computed here once per level by plane-parallel Monte Carlo and looked up per pixel. A
+medium whose density varies with height is traced as the homogeneous slab it is in reduced
+height (:mod:`seahaze.medium`), and looked up there.
 
 Method
     Photons leave the emitter (directions and weights from the scene's own emitter sampling, so
@@ -132,9 +134,10 @@ def build_tables(
     seed: int,
     grid: TableGrid = DEFAULT_GRID,
 ) -> list[DiffuseTable]:
-    """Tabulate the diffuse field of ``medium`` (a homogeneous one: its single-scattering
-    albedo and ``g``, over ``0 ≤ z ≤ top``) for every extinction in ``sigmas`` (1/m, each > 0)
-    from the same source photons (see the module docstring).
+    """Tabulate the diffuse field of ``medium`` (its single-scattering albedo and ``g``) for
+    every extinction in ``sigmas`` (1/m, each > 0) from the same source photons (see the
+    module docstring). A medium whose density varies with height is traced as the homogeneous
+    slab it is in reduced height (:mod:`seahaze.medium`): the table spans ``0 ≤ h ≤ H``.
 
     The first flight of ``sun`` photons is direct light (the integrator's shadow rays) and is
     not tallied; ``sky`` photons are tallied from the moment they enter, so the table also
@@ -142,11 +145,7 @@ def build_tables(
     ``i`` of every extinction draws the same random numbers (correlated table noise across
     levels, as the camera paths are).
     """
-    if not medium.is_homogeneous:
-        raise NotImplementedError(
-            f"the diffuse tables are traced in homogeneous media; {type(medium).__name__} is not"
-        )
-    top_m, albedo, g = medium.top_m, medium.albedo, medium.g
+    top_m, albedo, g = medium.reduced_top_m, medium.albedo, medium.g
     sigmas = [float(x) for x in sigmas]
     if any(x <= 0.0 for x in sigmas):
         raise ValueError(f"the diffuse table needs haze (sigma > 0), got {sigmas}")

@@ -362,6 +362,7 @@ def _assemble(
         },
         "haze": {
             **spec.haze.model_dump(mode="json", exclude={"levels"}),
+            "medium": session.loaded.medium.describe(),
             "box_half_width_m": session.loaded.box_half_width_m,
         },
         "levels": level_meta,

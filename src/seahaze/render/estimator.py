@@ -48,13 +48,21 @@ class EstimatorSettings:
     """Fewest photons per level table (half from the sun, half from the sky)."""
     max_table_photons: int = 1 << 20
     """Most photons per level table."""
+    max_levels_per_pass: int = 12
+    """Most levels one pass renders (its kernel grows with the count; more levels are rendered
+    in several passes of the same camera paths, :func:`seahaze.render.physical.levels_per_pass`)."""
 
     def __post_init__(self) -> None:
         for name in ("glint_share", "vessel_light_share", "near_share", "aim_share"):
             value = getattr(self, name)
             if not 0.0 <= value <= 1.0:
                 raise ValueError(f"estimator.{name} must lie in [0, 1], got {value}")
-        positive = ("camera_points", "samples_per_photon", "min_table_photons")
+        positive = (
+            "camera_points",
+            "samples_per_photon",
+            "min_table_photons",
+            "max_levels_per_pass",
+        )
         for name in ("bounces", "vessel_light_radius_px", *positive):
             value = getattr(self, name)
             if int(value) != value or value < (1 if name in positive else 0):

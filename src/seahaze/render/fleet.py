@@ -5,9 +5,8 @@ Why
     drjit compiles a render kernel for the set of shapes and BSDFs a scene holds (their
     virtual calls are traced instance by instance). Sun, sky and sea state are kernel
     parameters, but one Mitsuba mesh and BSDF per vessel part made the kernel differ with the
-    number and kinds of vessels: every scene of a varied batch compiled its own — 13 s of LLVM
-    time for a 1-level pass, 54 s for 11 levels on this project's 2-vCPU machine, against a few
-    seconds of rendering at CI size (docs/benchmarks.md, "Kernel reuse").
+    number and kinds of vessels: every scene of a varied batch compiled its own, which took far
+    longer than rendering it at CI size (docs/benchmarks.md, "Kernel reuse").
 
 How
     Every vessel part joins one mesh per roughness class (:data:`ROUGHNESS_CLASSES`: every
@@ -147,12 +146,18 @@ _LOADED: dict[tuple[str, float, bool], Any] = {}
 """The vessel BSDFs of the last scene, by (variant, roughness, black): kept for the next."""
 
 
+def kept_bsdf_keys() -> list[tuple[str, float, bool]]:
+    """The keys (kind, roughness, black) of the vessel BSDFs kept loaded from the last scene
+    (:func:`loaded_vessel_bsdfs`)."""
+    return list(_LOADED)
+
+
 def loaded_vessel_bsdfs(roughnesses: Sequence[float], black: bool = False) -> list[Any]:
     """The loaded Mitsuba BSDFs of :func:`vessel_bsdf` for ``roughnesses``, the same objects
     as the previous scene's where it had them.
 
-    Loading a roughplastic tabulates its coat's transmittance (a kernel launch): 17 ms each,
-    0.19 s of a CI-size scene's 3–4 s for the eleven classes, the same every scene. Only the
+    Loading a roughplastic tabulates its coat's transmittance (a kernel launch), the same for
+    every scene (docs/benchmarks.md, "Design measurements"). Only the
     last scene's BSDFs are kept: drjit traces a virtual call over every live BSDF, so a BSDF
     kept from an earlier, different set would join this scene's kernel (module docstring).
     """

@@ -218,7 +218,7 @@ class HazeIntegrator(mi.SamplingIntegrator):
         # tested at one distance from the levels' mixture, whose shadow ray costs a third of
         # finding the nearest hit (docs/physics.md, "The aureole").
         s, s_pdf = levels.mixture_distance(sampler.next_1d(active), length)
-        ray.maxt = enter + s
+        ray.maxt = levels.distance_at(ray, enter, s)
         hidden = lit & scene.ray_test(ray, lit)
         mis = mis_weight(pdf, self.glint.continuation_pdf(share, bsdf_pdf, d))
         weight = p.beta * value * source * mis / dr.maximum(pdf, 1e-30)
@@ -243,14 +243,16 @@ class HazeIntegrator(mi.SamplingIntegrator):
         sun_d = self.sun_cone_direction(sampler.next_2d(active))
         lit, sun = self.sun_source(sun_d, ray.d, active)
         mu_sun = dr.maximum(sun_d.z, 1e-6)
-        z_entry = ray.o.z + enter * ray.d.z
-        depth, climb = levels.depth_toward_sun(z_entry, mu_sun), 1.0 - ray.d.z / mu_sun
+        # In reduced height the medium is a homogeneous slab (seahaze.medium): the segment
+        # climbs d_z per metre of reduced length from its entry's reduced height.
+        h_entry = levels.reduced_height(ray.o.z + enter * ray.d.z)
+        depth, climb = levels.depth_toward_sun(h_entry, mu_sun), 1.0 - ray.d.z / mu_sun
         pick = sampler.next_1d(active)
         tables = levels.table.toward(-ray.d, levels.sun_cos_az, levels.sun_sin_az, pick)
         # Stratified, and the same for every level (common random numbers).
         n_points = self.settings.camera_points if weight is None else 1
         us = [(i + sampler.next_1d(active)) / n_points for i in range(n_points)]
-        top = self.medium.top_m
+        top = self.medium.reduced_top_m
         for k in range(self.n_levels):
             # Unshadowed sun: transmittance to the point and on to the sun are both
             # exponential in s, so their product integrates in closed form.
@@ -260,7 +262,7 @@ class HazeIntegrator(mi.SamplingIntegrator):
             diffuse = mi.Color3f(0.0)
             for u in us:
                 s = levels.own_distance(k, u, mass, length)
-                value = tables(k, (z_entry + s * ray.d.z) * (1.0 / top))
+                value = tables(k, (h_entry + s * ray.d.z) * (1.0 / top))
                 if not self.grey:  # distances follow green; reweight R and B
                     value = value * dr.exp(-(levels.sigma[k] - levels.sg[k]) * s)
                 diffuse += value
@@ -274,7 +276,7 @@ class HazeIntegrator(mi.SamplingIntegrator):
         ray shared by every level."""
         levels, ray = self.levels, along.ray
         s, pdf = levels.mixture_distance(sampler.next_1d(along.active), along.length)
-        x = ray(along.enter + s)
+        x = ray(levels.distance_at(ray, along.enter, s))
         shadow = mi.Ray3f(x, along.sun_d, ray.time, ray.wavelengths)
         shaded = along.lit & scene.ray_test(shadow, along.lit)
         scale = along.beta * along.source / dr.maximum(pdf, 1e-30)

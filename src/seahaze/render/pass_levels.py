@@ -7,9 +7,10 @@ level — ``σ_k``, the mixture the shared in-scattering points are drawn from, 
 and answers the integrators' per-level questions (transmittance, distances drawn in proportion
 to it, the sun's single scattering along a segment) through the medium's formulas.
 
-Every answer here is for a homogeneous medium, whose optical depth along a segment is ``σ_k``
-times its reduced length; a medium that is not (``is_homogeneous`` false) is refused when the
-levels are set, with the documented place to add its estimators (docs/architecture.md).
+Every answer is given in reduced length and reduced height, where any medium of
+:class:`~seahaze.medium.HazeMedium` (a vertical profile) is a homogeneous slab, so the closed
+forms hold for every profile (:mod:`seahaze.medium`); the medium maps reduced heights and
+distances back to points.
 """
 
 from __future__ import annotations
@@ -35,11 +36,6 @@ class PassLevels:
     extinction for R, G and B: their transmittances are one exponential, not three."""
 
     def __init__(self, medium: HazeMedium, n_levels: int, grey: bool):
-        if not medium.is_homogeneous:
-            raise NotImplementedError(
-                f"the physical mode renders homogeneous media; {type(medium).__name__} is not "
-                "(docs/architecture.md, 'Adding a kind of haze')"
-            )
         self.medium, self.n_levels, self.grey = medium, n_levels, grey
         self.ops = drjit_ops()
         self.set(
@@ -101,9 +97,19 @@ class PassLevels:
         levels, RGB otherwise."""
         return transmittance(self.ext[k], length, self.ops)
 
-    def depth_toward_sun(self, z: Any, mu_sun: Any) -> Any:
-        """The reduced length (m) from height ``z`` out of the medium toward the sun."""
-        return self.medium.depth_toward_sun(z, mu_sun, self.ops)
+    def reduced_height(self, z: Any) -> Any:
+        """The reduced height (m) of height ``z``."""
+        return self.medium.reduced_height(z, self.ops)
+
+    def distance_at(self, ray: Any, enter: Any, reduced: Any) -> Any:
+        """The parameter (m) along ``ray`` of the point ``reduced`` metres of reduced length
+        past its entry into the medium at ``enter``."""
+        return self.medium.distance_at(ray.o.z, ray.d.z, enter, reduced, self.ops)
+
+    def depth_toward_sun(self, h: Any, mu_sun: Any) -> Any:
+        """The reduced length (m) from reduced height ``h`` out of the medium toward the
+        sun."""
+        return self.medium.depth_toward_sun(h, mu_sun, self.ops)
 
     # -- distances along a segment ----------------------------------------------------------
     def mass(self, k: int, length: Any) -> Any:
@@ -151,7 +157,7 @@ class PassLevels:
         """Level ``k``'s sun-scattered fraction over ``length`` metres of a segment entering
         the medium ``depth`` metres (reduced) below its top along the sun, whose depth toward
         the sun grows by ``climb`` (``1 − d_z / μ_sun``) per metre
-        (:func:`seahaze.medium.sun_scattered_fraction`); ``near_k``: the
+        (:func:`seahaze.medium.sun_scattered_fraction`, exact in reduced length); ``near_k``: the
         level's transmittance over that depth, if already known (None computes it)."""
         import drjit as dr
 

@@ -22,8 +22,9 @@ the same for every scene (no value is baked into it). The physics is the numpy d
 * **Few transcendental functions per flight.** Azimuths are rotations by the direction's own
   horizontal cosine and sine (the sea) or by the sun's (the tally's folded azimuth), not
   ``atan2``/``cos``/``sin`` round trips, and a sea sample (direction, weight) is one packet
-  gather of eight floats, read only by photons at the sea. With the Russian-roulette floor
-  (:data:`WEIGHT_FLOOR`) the default scene's eleven tables took 0.8–0.9 s instead of 1.6 s.
+  gather of eight floats, read only by photons at the sea; faint photons end by Russian
+  roulette (:data:`WEIGHT_FLOOR`). What each of these saved is in docs/benchmarks.md, "Design
+  measurements".
 """
 
 from __future__ import annotations
@@ -39,9 +40,9 @@ FIXED_POINT = float(2**30)
 """Tally units per unit of normalised photon weight (a photon weighs about one)."""
 WEIGHT_FLOOR = 1.0e-2
 """Russian roulette below this fraction of the mean source photon weight (unbiased: a survivor
-is lifted to the floor). Photons this faint are mostly sky photons after a sea reflection;
-raising the floor from 1e-4 changed the default scene's tables by 2e-5 of their mean per bin
-(their own noise is ~1 %) and cut the tracer's time by ~15 %."""
+is lifted to the floor). Photons this faint are mostly sky photons after a sea reflection:
+the floor changes the tables far less than their own noise (docs/benchmarks.md, "Design
+measurements")."""
 MAX_FLIGHTS = 4000
 MU_FLOOR = 1.0e-6
 """|μ| floor of the track-length division: a flight within 1e-6 of horizontal has probability

@@ -33,8 +33,6 @@ from .photon_sources import emitter_photons, sample_sea_reflectance, sea_bsdf
 from .scene import SEA_SHAPE, LoadedScene, stratified_spp, sunsky_dict
 from .segment_smooth import segments, smooth_within_segments
 
-MAX_LEVELS_PER_PASS = 12
-"""Most levels one pass renders (its kernel's size grows with the count)."""
 FILM_BUDGET_BYTES = 2 << 30
 """Most memory the film of one pass may take; more levels are rendered in several passes,
 each from the same camera paths."""
@@ -145,7 +143,8 @@ class PhysicalRenderer:
         photons = self.settings.photons_for(cam.width * cam.height * spp)
         tables = self.tables(sigma, albedo, g, seed, photons) if len(sigma) else None
         table_seconds = time.perf_counter() - start
-        group = levels_per_pass(cam.width, cam.height, len(sigma))
+        most = self.settings.max_levels_per_pass
+        group = levels_per_pass(cam.width, cam.height, len(sigma), most)
         clean: np.ndarray | None = None
         levels: list[np.ndarray] = []
         for first in range(0, max(len(sigma), 1), group):
@@ -227,10 +226,12 @@ def vessel_light_spp(spp: int, settings: EstimatorSettings = DEFAULT_SETTINGS) -
     return stratified_spp(max(1, settings.vessel_light_spp(spp)))
 
 
-def levels_per_pass(width: int, height: int, n_levels: int) -> int:
-    """How many levels one pass renders: all of them up to :data:`MAX_LEVELS_PER_PASS`, fewer
-    where the film (RGB, weight and 3 channels per level, float32, with a developed copy) would
-    pass :data:`FILM_BUDGET_BYTES`."""
+def levels_per_pass(
+    width: int, height: int, n_levels: int, most: int = DEFAULT_SETTINGS.max_levels_per_pass
+) -> int:
+    """How many levels one pass renders: all of them up to ``most``, fewer where the film
+    (RGB, weight and 3 channels per level, float32, with a developed copy) would pass
+    :data:`FILM_BUDGET_BYTES`."""
     per_level = 2 * 3 * 4 * width * height
     fit = (FILM_BUDGET_BYTES - 2 * 4 * 4 * width * height) // per_level
-    return int(max(1, min(max(n_levels, 1), MAX_LEVELS_PER_PASS, fit)))
+    return int(max(1, min(max(n_levels, 1), most, fit)))

@@ -58,10 +58,9 @@ AIRLIGHT_RES = 8
 PHYSICAL_SAMPLER = "multijitter"
 """The ``physical`` mode's sampler: correlated multi-jittered samples (Kensler 2013), stratified
 in the pixel and in every dimension of the path, where the other modes keep ``independent``.
-On the default scene at 32 spp it lowers the sea's rms error 2.5-fold at the same cost: the
-pixel's many wave facets and the first bounce's reflection lobe are stratified
-(docs/benchmarks.md, "Ground-truth noise"). It takes ``a × b`` samples with
-``a = ⌊√spp⌋`` (:func:`stratified_spp`)."""
+It lowers the sea's error at the same cost, because the pixel's many wave facets and the first
+bounce's reflection lobe are stratified (docs/benchmarks.md, "Ground-truth noise"). It takes
+``a × b`` samples with ``a = ⌊√spp⌋`` (:func:`stratified_spp`)."""
 BOX_LAYER_WIDTHS = 3.0
 """Least half-width of the haze box in thicknesses ``H`` of the layer (``haze.top_m`` minus its
 bottom). In dense haze the light reaches the camera by diffusing down through the layer, and

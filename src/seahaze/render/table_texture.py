@@ -13,14 +13,13 @@ is a large part of a level's cost, and the layout is chosen for it:
   Pharr, Wronski, Salvi & Fajardo (2024), Filtering after shading with stochastic texture
   filtering, Proc. ACM Comput. Graph. Interact. Tech. 7(1)). The choice is made once per
   segment from one uniform number and serves every level and height; the pixel's samples
-  average it out. On the default scene (320×180, 32 spp) a lookup reads a quarter of the
-  memory, and the levels' noise did not change measurably (two-seed PSNR within 0.1 dB, frame
-  means within 3e-5 of four-texel lookups); docs/physics.md, "The kernel", has the time.
+  average it out. A lookup reads a quarter of the memory, and the levels' noise does not
+  change measurably (docs/benchmarks.md, "Design measurements").
 * **Memory order** ``(μ, φ, z, level, rgba)``: every level's value of one texel sits in one run
   of memory (a segment looks all levels up in the same direction), and RGB is padded to four
-  floats so that one packet gather reads a texel. Measured on the default scene (320×180,
-  32 spp, 11 levels) the pass took 7.7 s instead of 9.5 s with one scalar gather per channel
-  and the levels far apart; the images are bit-identical.
+  floats so that one packet gather reads a texel (faster than one scalar gather per channel
+  with the levels far apart, the images bit-identical: docs/benchmarks.md, "Design
+  measurements").
 """
 
 from __future__ import annotations

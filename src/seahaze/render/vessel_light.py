@@ -85,7 +85,7 @@ class VesselLightPass(HazeIntegrator):
         (docs/physics.md, "Haze in front of a vessel")."""
         levels = self.levels
         s, pdf = self.probe_point(ray, enter, length, sampler, active)
-        x = ray(enter + s)
+        x = ray(levels.distance_at(ray, enter, s))
         d, phase_weight = self.probe_direction(x, ray.d, sampler, active)
         probe = mi.Ray3f(x, d, ray.time, ray.wavelengths)
         si = scene.ray_intersect(probe, active)
@@ -144,7 +144,10 @@ class VesselLightPass(HazeIntegrator):
         :meth:`along_ray`'s weight."""
         levels = self.levels
         u = sampler.next_1d(active)
-        if self.settings.near_share <= 0.0:  # the mixture alone: no loop over the vessels
+        # The mixture alone where no probe is drawn near a vessel (no loop over the vessels)
+        # and in a medium whose reduced lengths are not lengths: the near strategy draws
+        # metres from the ray's closest approach to a vessel.
+        if self.settings.near_share <= 0.0 or not self.medium.reduced_is_geometric:
             return levels.mixture_distance(u, length)
         total, chosen, u = self.draw(lambda i: self.along_ray(i, ray, enter, length)[3], u, active)
         near_share = dr.select(total > 0.0, self.settings.near_share, 0.0)

@@ -138,6 +138,10 @@ class LevelMeasurement:
 
     targets: list[Target]
     distance_m: np.ndarray
+    """Mean distance (m) along each target's measured rays."""
+    reduced_m: np.ndarray
+    """Mean reduced length (m) in the medium along the same rays: a target's optical depth
+    is ``σ`` times it (:mod:`seahaze.medium`; its distance in a uniform layer)."""
     luminance: np.ndarray
     """(B, H, W) per-batch luminance."""
     radiance: np.ndarray
@@ -170,6 +174,7 @@ def render_level_batches(
         reach_m=farthest,
     )
     distances = _check_target_pixels(session.pixels, targets)
+    reduced = _mean_over_targets(session.pixels.haze_path_length(session.loaded.medium), targets)
     sigma = channel_extinction(visibility_m, haze.threshold, haze.extinction_spectrum)
     spp = max(1, spec.render.spp // batches)
     clean = session.render_clean(spp)
@@ -191,13 +196,15 @@ def render_level_batches(
             radiance = oidn.denoise(radiance, features, exposure)
         lum.append(imaging.luminance(radiance))
         total += radiance
-    return LevelMeasurement(targets, distances, np.stack(lum), (total / batches).astype(np.float32))
+    luminance = np.stack(lum)
+    return LevelMeasurement(
+        targets, distances, reduced, luminance, (total / batches).astype(np.float32)
+    )
 
 
 def _check_target_pixels(geo: Any, targets: Sequence[Target]) -> np.ndarray:
     """Mean ray distance (m) to each target over its measured pixels; raises RuntimeError if a
     measured pixel's centre ray does not hit its target, or a sky pixel is not sky."""
-    distances = []
     for t in targets:
         rows, cols = target_pixels(t)
         s_rows, s_cols = sky_pixels(t)
@@ -205,8 +212,16 @@ def _check_target_pixels(geo: Any, targets: Sequence[Target]) -> np.ndarray:
             raise RuntimeError(f"target {t.index}: measured pixels miss the target")
         if not np.all(np.isinf(geo.distance_m[s_rows][:, s_cols])):
             raise RuntimeError(f"target {t.index}: the sky beside it is not clear sky")
-        distances.append(float(np.mean(geo.distance_m[rows, cols], dtype=np.float64)))
-    return np.array(distances)
+    return _mean_over_targets(geo.distance_m, targets)
+
+
+def _mean_over_targets(values: np.ndarray, targets: Sequence[Target]) -> np.ndarray:
+    """The mean of per-pixel ``values`` (H, W) over each target's measured pixels."""
+    means = []
+    for t in targets:
+        rows, cols = target_pixels(t)
+        means.append(float(np.mean(values[rows, cols], dtype=np.float64)))
+    return np.array(means)
 
 
 def analyse_level(
@@ -220,7 +235,9 @@ def analyse_level(
 ) -> LevelReport:
     """Contrasts, fit and jackknife of one level's batches."""
     sigma = extinction_coefficient(visibility_m, threshold)
-    d = measurement.distance_m
+    # Koschmieder's law in the medium: a black target's contrast is −exp(−σ ℓ), ℓ its reduced
+    # length (its distance in a uniform layer).
+    d = measurement.reduced_m
     stats = measure_contrasts(measurement.luminance, measurement.targets)
     fit = fit_extinction(d, stats.contrast, stats.stderr)
     measured = visibility_or_nan(fit.sigma, threshold)
@@ -229,8 +246,8 @@ def analyse_level(
     targets = [
         TargetReport(
             t.index,
-            float(d[i]),
-            float(d[i] / visibility_m),
+            float(measurement.distance_m[i]),
+            float(measurement.distance_m[i] / visibility_m),
             t.width_m,
             t.top_m,
             int(stats.target_pixels[i]),

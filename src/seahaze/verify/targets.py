@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..camera import Camera
+from ..medium import haze_medium
 from ..spec import OverrideError, SceneSpec, VesselsSpec, with_changes
 from ..visibility import extinction_coefficient
 from ..world import MeshData, VesselInstance
@@ -156,10 +157,11 @@ def calibration_spec(
 
 def sky_optical_depth(spec: SceneSpec, visibility_m: float) -> float:
     """Optical depth of the haze along the highest sky ray beside the targets (elevation
-    :data:`TARGET_TOP_DEG`) from the camera to the top of the layer."""
+    :data:`TARGET_TOP_DEG`) from the camera out of the medium (:mod:`seahaze.medium`)."""
     sigma = extinction_coefficient(visibility_m, spec.haze.threshold)
-    rise = spec.haze.top_m - spec.camera.height_m
-    return sigma * rise / math.sin(math.radians(TARGET_TOP_DEG))
+    rise = np.array([math.sin(math.radians(TARGET_TOP_DEG))])
+    reduced = haze_medium(spec.haze).path_length(spec.camera.height_m, rise, np.array([np.inf]))
+    return sigma * float(reduced[0])
 
 
 def horizon_row(camera: Camera) -> float:
