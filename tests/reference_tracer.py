@@ -3,7 +3,9 @@
 The same physics as :mod:`seahaze.render.photon_tracer` (analog flights, the split first sun
 flight, HG scattering, the sea, Russian roulette, the track-length tally), written wavefront-style
 in float64 numpy with its own random numbers, so the compiled tracer is checked against a
-separate program rather than against itself.
+separate program rather than against itself. It keeps its own slab (flights to the top and to
+the sea at z = 0) on purpose, rather than asking :mod:`seahaze.medium`: a shared formula would
+be checked against itself.
 """
 
 from __future__ import annotations
