@@ -143,19 +143,6 @@ class HazeIntegrator(mi.SamplingIntegrator):
         self.glint = glint_lobe.GlintLobe(sun_axis(sun), wind_speed, settings.glint_share)
         self.levels = PassLevels(medium, n_levels, grey)
 
-    def set_levels(
-        self,
-        sigma: np.ndarray,
-        mixture: np.ndarray,
-        albedo: float,
-        g: float,
-        tables: np.ndarray,
-        sun_azimuth_rad: float,
-    ) -> None:
-        """Point the integrator at a set of levels without changing its compiled kernel
-        (:meth:`.PassLevels.set`)."""
-        self.levels.set(sigma, mixture, albedo, g, tables, sun_azimuth_rad)
-
     def aov_names(self) -> list[str]:
         return [f"{k}.{c}" for k in range(self.n_levels) for c in "RGB"]
 

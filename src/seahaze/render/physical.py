@@ -216,7 +216,7 @@ class PhysicalRenderer:
                 self.sun, self.sky, medium, n, grey, self.wind_speed, self.settings
             )
         integrator = self.integrators[key]
-        integrator.set_levels(sigma, np.full(n, 1.0 / n), albedo, g, tables, self.sun_azimuth_rad)
+        integrator.levels.set(sigma, np.full(n, 1.0 / n), albedo, g, tables, self.sun_azimuth_rad)
         return integrator
 
 
