@@ -13,6 +13,15 @@ from seahaze.world import MeshData, SceneGeometry, VesselInstance
 PLANE_HALF_SIZE_M = 2.0e5
 
 
+@pytest.fixture(autouse=True)
+def seahaze_state(tmp_path_factory, monkeypatch):
+    """seahaze's state folder (the digests of the records of files it wrote into users'
+    folders) per test, not the home's: a test sees only the records it wrote itself."""
+    from seahaze.dataset.owned import STATE_ENV
+
+    monkeypatch.setenv(STATE_ENV, str(tmp_path_factory.mktemp("state")))
+
+
 def flat_sea_mesh(rings: int = 96, sectors: int = 128) -> MeshData:
     """The sea as a flat camera-centred polar grid at z = 0.
 

@@ -272,6 +272,21 @@ def test_force_deletes_only_the_files_the_old_manifest_lists(scene, finished, tm
     assert (out / "images/v2000/dmg.png").exists()
 
 
+def test_force_deletes_nothing_through_a_level_folder_that_leads_outside(
+    scene, finished, tmp_path
+):
+    out = _copy(finished, tmp_path)
+    elsewhere = tmp_path / "photos"
+    shutil.move(out / "exr" / "v1000", elsewhere)  # the same names, outside the dataset
+    (out / "exr" / "v1000").symlink_to(elsewhere, target_is_directory=True)
+    before = {p: p.read_bytes() for p in elsewhere.iterdir()}
+    assert before
+    code, _, err = _rerun(scene, out, "--vis", "2000", "--force")
+    assert code == 0, err
+    assert {p: p.read_bytes() for p in elsewhere.iterdir()} == before
+    assert not (out / "images/v1000/dmg.png").exists()  # the dataset's own: removed
+
+
 def test_force_refuses_to_leave_a_level_folder_the_coco_writer_would_read(
     scene, finished, tmp_path
 ):

@@ -331,7 +331,8 @@ def prune(root: Path, old: dict[str, Any], keep_scenes: set[str], keep_levels: s
 
     Only files the old manifest lists are candidates — its scenes × its levels (``clean``
     included), their meta and depth, and its levels' COCO files — so a file seahaze did not
-    write is never deleted. Level folders left empty are removed."""
+    write is never deleted; a candidate whose folder resolves outside ``root`` (a level folder
+    replaced by a symbolic link) is left alone too. Level folders left empty are removed."""
     layout = Layout(root)
     levels = [CLEAN_LEVEL, *(e["name"] for e in old.get("levels", []))]
     doomed: list[Path] = []
@@ -347,7 +348,10 @@ def prune(root: Path, old: dict[str, Any], keep_scenes: set[str], keep_levels: s
             doomed += [layout.meta(scene), layout.depth(scene)]
     doomed += [layout.coco(level) for level in levels if level not in keep_levels]
     removed = 0
+    inside = root.resolve()
     for path in doomed:
+        if not path.parent.resolve().is_relative_to(inside):
+            continue  # a folder that leads elsewhere: not the dataset's files
         if path.is_file() and not path.is_symlink():
             path.unlink()
             removed += 1

@@ -39,6 +39,8 @@ def cmd_export(args: argparse.Namespace) -> int:
             f"seahaze: error: cannot write the export: {err.strerror}{where}{hint}", file=sys.stderr
         )
         return 3
+    for line in report.warnings:
+        print(f"seahaze: warning: {line}", file=sys.stderr)
     pairs = f", {report.pairs} hazy/clean pairs" if report.pairs else ""
     removed = f"; removed {report.removed} file(s) of an earlier export" if report.removed else ""
     print(

@@ -33,6 +33,8 @@ class ExportReport:
     """How the dataset files were placed, e.g. ``hard links: 104``."""
     removed: int
     """Files of an earlier export of this folder that this one no longer has."""
+    warnings: tuple[str, ...] = ()
+    """Record entries not trusted and files left alone, one line each."""
 
 
 def export_dataset(
@@ -69,7 +71,8 @@ def export_dataset(
         placer.place(path, out / target)
     for target, text in plan.texts.items():
         write_text(out / target, text)
-    owned.release(stale)
+    owned.seal(plan.targets())
+    kept = owned.release(stale)
     return ExportReport(
         out,
         layout,
@@ -79,5 +82,6 @@ def export_dataset(
         len(plan.texts),
         plan.pairs,
         placer.summary(),
-        len(stale),
+        len(stale) - len(kept),
+        (*owned.ignored, *kept),
     )

@@ -148,7 +148,9 @@ def _run_detector(
 
     detector = _detector(args, dataset)
     images = sum(len(v) for v in folders.values())
-    detections = write_predictions(detector, folders, args.pred)
+    detections, warnings = write_predictions(detector, folders, args.pred)
+    for line in warnings:
+        _warn(line)
     print(
         f"{detector.weights.name}: {detections} detections on {images} images "
         f"(conf >= {detector.settings.conf:g}, imgsz {detector.imgsz}) written to {args.pred}"

@@ -306,9 +306,10 @@ def prediction_text(boxes: Any) -> str:
 
 def write_predictions(
     detector: Detector, folders: Mapping[str, Mapping[str, Path]], pred_root: Path
-) -> int:
+) -> tuple[int, list[str]]:
     """Run the detector on each folder's images and write ``pred_root/<folder>/<scene>.txt``
-    (``""`` as a folder name: ``pred_root`` itself). Returns the number of detections.
+    (``""`` as a folder name: ``pred_root`` itself). Returns the number of detections and
+    warnings (record entries not trusted, files of an earlier run left alone).
 
     Files seahaze did not write are never overwritten (:mod:`seahaze.dataset.owned`); files of
     an earlier run in the folders written now are replaced or, for scenes no longer there,
@@ -332,8 +333,9 @@ def write_predictions(
         for scene, text in predict(detector, images):
             write_text(pred_root / _relative(folder, scene), text)
             detections += text.count("\n")
-    owned.release(rel for rel in stale if str(Path(rel).parent) in written)
-    return detections
+    owned.seal(targets)
+    kept = owned.release(rel for rel in stale if str(Path(rel).parent) in written)
+    return detections, [*owned.ignored, *kept]
 
 
 def _relative(folder: str, scene: str) -> str:
