@@ -35,9 +35,9 @@ def proc_status_mib(field: str = "VmRSS") -> float:
 
 def run_pass(name: str, res: tuple[int, int], spp: int, vis: float) -> dict:
     """Run one pass in this process and return its timings and memory."""
-    from seahaze.medium import haze_medium
     from seahaze.render import passes
     from seahaze.render.engine import open_session
+    from seahaze.scene_medium import haze_medium
     from seahaze.sceneio import load_scene
     from seahaze.spec import with_overrides
     from seahaze.visibility import channel_extinction

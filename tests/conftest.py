@@ -13,6 +13,13 @@ from seahaze.world import MeshData, SceneGeometry, VesselInstance
 PLANE_HALF_SIZE_M = 2.0e5
 
 
+def region_stats(images: list[np.ndarray], *masks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-region mean RGB, (regions, 3), of each of ``images`` (one per seed), averaged over
+    the images, and its standard error (their spread over sqrt of their count)."""
+    means = np.array([[image[mask].mean(axis=0) for mask in masks] for image in images])
+    return means.mean(axis=0), means.std(axis=0, ddof=1) / np.sqrt(len(images))
+
+
 @pytest.fixture(autouse=True)
 def seahaze_state(tmp_path_factory, monkeypatch):
     """seahaze's state folder (the digests of the records of files it wrote into users'

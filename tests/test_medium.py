@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from conftest import flat_sea_mesh, small_spec
+from conftest import flat_sea_mesh, region_stats, small_spec
 from seahaze.medium import (
     HAZE_BOTTOM_M,
     NUMPY,
@@ -37,14 +37,6 @@ class TwoLayers(HazeMedium):
     albedo: float = 0.998
     g: float = 0.75
     bottom: float = HAZE_BOTTOM_M
-
-    @property
-    def bottom_m(self) -> float:
-        return self.bottom
-
-    @property
-    def top_m(self) -> float:
-        return self.top
 
     @property
     def reduced_is_geometric(self) -> bool:
@@ -285,8 +277,7 @@ def test_a_new_medium_renders_in_physical_as_in_reference(mitsuba_variant, visib
             .radiance
             for seed in range(4)
         ]
-        means = np.array([[b[sky].mean(axis=0), b[sea].mean(axis=0)] for b in batches])
-        return means.mean(axis=0), means.std(axis=0, ddof=1) / 2.0
+        return region_stats(batches, sky, sea)
 
     ref, ref_se = region_means("reference", 256)
     phys, phys_se = region_means("physical", 32)

@@ -21,14 +21,15 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from conftest import box_vessel, load_flat_scene, small_spec
+from conftest import box_vessel, load_flat_scene, region_stats, small_spec
 from seahaze.haze import hg_phase
-from seahaze.medium import HomogeneousSlab, haze_medium
+from seahaze.medium import HomogeneousSlab
 from seahaze.render import passes, physical
 from seahaze.render.diffuse_table import TableGrid, build_tables
 from seahaze.render.estimator import EstimatorSettings
 from seahaze.render.levels import LevelRenderer
 from seahaze.render.photon_tracer import SeaReflectance
+from seahaze.scene_medium import haze_medium
 from seahaze.visibility import channel_extinction
 
 pytestmark = pytest.mark.usefixtures("mitsuba_variant")
@@ -134,8 +135,7 @@ def test_physical_matches_volpath_on_sky_and_sea(
             scenes.level(mode, visibility, spp, seed, extinction_spectrum=spectrum).radiance
             for seed in range(4)
         ]
-        means = np.array([[b[sky].mean(axis=0), b[sea].mean(axis=0)] for b in batches])
-        return means.mean(axis=0), means.std(axis=0, ddof=1) / 2.0
+        return region_stats(batches, sky, sea)
 
     ref, ref_se = region_means("reference", 256)
     phys, phys_se = region_means("physical", 32)

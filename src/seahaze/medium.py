@@ -162,15 +162,20 @@ class HazeMedium(ABC):
     g: float
     """Henyey–Greenstein asymmetry of the phase function (−1–1)."""
 
-    @property
-    @abstractmethod
-    def bottom_m(self) -> float:
-        """Lowest height (m) where ``ρ`` may be non-zero."""
+    bottom: float
+    """Lowest height (m) where ``ρ`` may be non-zero (a field of every medium)."""
+    top: float
+    """Highest height (m) where ``ρ`` may be non-zero (a field of every medium)."""
 
     @property
-    @abstractmethod
+    def bottom_m(self) -> float:
+        """:attr:`bottom` (m)."""
+        return self.bottom
+
+    @property
     def top_m(self) -> float:
-        """Highest height (m) where ``ρ`` may be non-zero; the diffuse tables span ``[0, top]``."""
+        """:attr:`top` (m)."""
+        return self.top
 
     @property
     @abstractmethod
@@ -263,14 +268,6 @@ class HomogeneousSlab(HazeMedium):
             raise ValueError(f"the slab's top ({self.top} m) must lie above its bottom")
 
     @property
-    def bottom_m(self) -> float:
-        return self.bottom
-
-    @property
-    def top_m(self) -> float:
-        return self.top
-
-    @property
     def reduced_is_geometric(self) -> bool:
         return True
 
@@ -324,8 +321,3 @@ class HomogeneousSlab(HazeMedium):
     def describe(self) -> dict[str, Any]:
         return {**super().describe(), "bottom_m": self.bottom, "top_m": self.top}
 
-
-def haze_medium(haze: Any) -> HazeMedium:
-    """The medium a scene's ``haze`` section (:class:`seahaze.spec.HazeSpec`) describes: a
-    homogeneous slab from :data:`HAZE_BOTTOM_M` to ``haze.top_m``."""
-    return HomogeneousSlab(top=float(haze.top_m), albedo=float(haze.albedo), g=float(haze.g))

@@ -469,8 +469,39 @@ class VesselsSpec(_Spec):
     )
 
 
+class FogLayerSpec(_Spec):
+    """A layer of sea fog under thinner haze (seahaze.fog_layer): dense from the sea up to its
+    top, then thinning over a soft edge to `above_ratio` of its density up to `haze.top_m`. A
+    level's extinction (3.912/V) is the extinction along the horizontal line of sight at the
+    camera's height: a camera above the fog sees the thin haze at V, the fog below denser."""
+
+    top_m: float = Field(
+        ...,
+        ge=20.0,
+        le=400.0,
+        description="Height of the fog top (the inversion) above sea level.",
+        json_schema_extra=_unit("m"),
+    )
+    edge_m: float = Field(
+        10.0,
+        ge=1.0,
+        le=100.0,
+        description="Thickness scale of the fog's top edge: within 2 edge_m of the top the "
+        "density goes 88 % of the way from the fog's to the haze's above.",
+        json_schema_extra=_unit("m"),
+    )
+    above_ratio: float = Field(
+        0.1,
+        ge=0.01,
+        le=1.0,
+        description="Density of the haze above the fog relative to the fog's.",
+        json_schema_extra=_unit("1"),
+    )
+
+
 class HazeSpec(_Spec):
-    """The homogeneous haze layer whose extinction is set by the visibility of each level."""
+    """The haze whose extinction is set by the visibility of each level: a homogeneous layer
+    up to `top_m`, or with `fog_layer` a fog layer under thinner haze."""
 
     levels: list[Annotated[float, Field(ge=MIN_LEVEL_M, le=MAX_LEVEL_M)]] = Field(
         default_factory=lambda: [float(v) for v in GRADED_LEVELS_M],
@@ -515,6 +546,21 @@ class HazeSpec(_Spec):
         description="Height of the top of the haze layer above sea level.",
         json_schema_extra=_unit("m"),
     )
+    fog_layer: FogLayerSpec | None = Field(
+        None,
+        description="A fog layer under thinner haze up to `top_m` (default none: the haze is "
+        "homogeneous up to `top_m`). See docs/physics.md, 'A fog layer'.",
+    )
+
+    @model_validator(mode="after")
+    def _fog_below_the_top(self) -> HazeSpec:
+        fog = self.fog_layer
+        if fog is not None and fog.top_m + 2.0 * fog.edge_m > self.top_m:
+            raise ValueError(
+                f"fog_layer.top_m + 2 fog_layer.edge_m ({fog.top_m + 2.0 * fog.edge_m:g} m) "
+                f"must not pass top_m ({self.top_m:g} m): raise top_m or lower the fog"
+            )
+        return self
 
     @field_validator("levels")
     @classmethod

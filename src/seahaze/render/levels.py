@@ -21,7 +21,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..haze import Extinction
-from ..medium import haze_medium
 from ..seeds import RenderPass, render_seed
 from ..spec import RENDER_MODES, HazeSpec, RenderSpec
 from . import passes
@@ -93,7 +92,7 @@ class LevelRenderer:
             airlight = passes.render_airlight(
                 loaded, sigma, haze.albedo, haze.g, render.airlight_spp, render.seed, level_index
             )
-            medium = haze_medium(haze)
+            medium = self.loaded.medium.with_optics(haze.albedo, haze.g)
             radiance = passes.asm_level(self.clean, self.geometry, sigma, airlight.rgb, medium)
             return LevelRender(radiance, airlight)
         # Physical: one pass from the scene's camera paths (whatever the level index), so a

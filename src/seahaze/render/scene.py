@@ -31,8 +31,9 @@ import numpy as np
 
 from ..camera import Camera
 from ..haze import Extinction, extinction_rgb, haze_box_half_width
-from ..medium import HazeMedium, haze_medium
+from ..medium import HazeMedium
 from ..ocean import FOAM_REFLECTANCE
+from ..scene_medium import haze_medium
 from ..spec import SceneSpec
 from ..visibility import channel_extinction
 from ..world import (
@@ -303,11 +304,11 @@ def build_scene(
     black calibration targets of ``seahaze verify``). ``haze_box=False`` leaves the Mitsuba
     medium out: the ``physical`` mode computes the haze analytically in its own integrator and
     needs only the surfaces, sun and sky. ``medium``: the haze, default the one ``spec.haze``
-    describes (:func:`seahaze.medium.haze_medium`).
+    describes (:func:`seahaze.scene_medium.haze_medium`).
     """
     mi = _mi()
     haze = spec.haze
-    medium = medium or haze_medium(haze)
+    medium = medium or haze_medium(haze, camera.height_m)
     top, bottom = medium.top_m, medium.bottom_m
     sigma_min = min(
         channel_extinction(v, haze.threshold, haze.extinction_spectrum).min()

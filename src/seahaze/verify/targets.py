@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..camera import Camera
-from ..medium import haze_medium
+from ..scene_medium import haze_medium
 from ..spec import OverrideError, SceneSpec, VesselsSpec, with_changes
 from ..visibility import extinction_coefficient
 from ..world import MeshData, VesselInstance
@@ -160,7 +160,8 @@ def sky_optical_depth(spec: SceneSpec, visibility_m: float) -> float:
     :data:`TARGET_TOP_DEG`) from the camera out of the medium (:mod:`seahaze.medium`)."""
     sigma = extinction_coefficient(visibility_m, spec.haze.threshold)
     rise = np.array([math.sin(math.radians(TARGET_TOP_DEG))])
-    reduced = haze_medium(spec.haze).path_length(spec.camera.height_m, rise, np.array([np.inf]))
+    medium = haze_medium(spec.haze, spec.camera.height_m)
+    reduced = medium.path_length(spec.camera.height_m, rise, np.array([np.inf]))
     return sigma * float(reduced[0])
 
 
