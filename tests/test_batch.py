@@ -302,6 +302,24 @@ def test_sigkill_mid_batch_then_resume_gives_identical_files(template, reference
     _assert_same_tree(out, reference)
 
 
+@pytest.mark.parametrize("kind", ["folder", "link"])
+def test_a_lock_name_that_is_not_a_lock_file_is_refused(kind, tmp_path) -> None:
+    from seahaze.batch import LOCK_NAME
+    from seahaze.batch.errors import DatasetLockedError
+
+    out = tmp_path / "ds"
+    out.mkdir()
+    victim = tmp_path / "victim.txt"
+    victim.write_text("not to be truncated")
+    if kind == "folder":
+        (out / LOCK_NAME).mkdir()
+    else:
+        (out / LOCK_NAME).symlink_to(victim)
+    with pytest.raises(DatasetLockedError, match="not seahaze's lock file"), DatasetLock(out):
+        pass
+    assert victim.read_text() == "not to be truncated"
+
+
 def test_a_second_process_is_refused_by_the_lock(template, reference, tmp_path, capsys):
     out = tmp_path / "locked"
     shutil.copytree(reference, out)

@@ -61,3 +61,16 @@ def test_meta_records_the_settings_a_physical_render_used() -> None:
     assert meta["vessel_light"] == {"spp": 3, "smoothing_radius_px": 4}  # 42 / 14
     asm = parse_scene_text("render:\n  mode: asm\n")
     assert "estimator" not in render_meta(asm)
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["sequence:\n  frames: true\n", "render:\n  spp: false\n", "camera:\n  height_m: true\n"],
+)
+def test_true_or_false_is_not_taken_for_a_number(text: str) -> None:
+    # YAML's booleans once passed as 1/0 (`sequence.frames: true` rendered one frame).
+    with pytest.raises(SceneFileError, match=r"s\.yaml:2: .*a number is needed here, not true"):
+        parse_scene_text(text, file="s.yaml")
+    # A boolean where one is asked for, and denoise's bare on/off, still read as before.
+    spec = parse_scene_text("render:\n  denoise: off\n  write_exr: false\n")
+    assert spec.render.denoise == "off" and spec.render.write_exr is False

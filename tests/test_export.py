@@ -304,6 +304,10 @@ def test_bad_level_and_output_inside_the_dataset_are_refused(split_dataset, tmp_
     assert _export(split_dataset, split_dataset / "export", "paired") == 2
     assert "inside the dataset" in _one_line_error(capsys)
     assert not (split_dataset / "export").exists()
+    for empty in ("", ",,,"):  # once exported nothing, exit 0
+        assert _export(split_dataset, tmp_path / "o", "paired", "--levels", empty) == 2
+        assert "no level named" in _one_line_error(capsys)
+    assert not (tmp_path / "o").exists()
 
 
 def test_files_it_did_not_write_are_never_overwritten(split_dataset, splits, tmp_path, capsys):

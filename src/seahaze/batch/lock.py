@@ -31,7 +31,7 @@ class DatasetLock:
         import fcntl
 
         while True:
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            fd = self._open()
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
@@ -58,6 +58,19 @@ class DatasetLock:
         os.pwrite(fd, (me + "\n").encode(), 0)
         self._fd = fd
         return self
+
+    def _open(self) -> int:
+        """The lock file, opened (created if absent). A folder, a link or anything else under
+        the lock's name is refused: never followed, truncated or written through."""
+        try:
+            return os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
+        except OSError as err:
+            if self.path.is_symlink() or (os.path.lexists(self.path) and not self.path.is_file()):
+                kind = "symbolic link" if self.path.is_symlink() else "folder or special file"
+                raise DatasetLockedError(
+                    f"{self.path} is a {kind}, not seahaze's lock file: remove it to render here"
+                ) from None
+            raise err
 
     def __exit__(self, *exc: object) -> None:
         if self._fd is not None:

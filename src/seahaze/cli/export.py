@@ -17,9 +17,15 @@ def _levels(text: str | None) -> list[str] | None:
     from ..metric.reader import parse_level
 
     try:
-        return [parse_level(item) for item in text.split(",") if item.strip()]
+        levels = [parse_level(item) for item in text.split(",") if item.strip()]
     except MetricInputError as err:
         raise UsageError(str(err).replace("--level ", "--levels ")) from None
+    if not levels:
+        raise UsageError(
+            f"--levels {text!r}: no level named; give levels such as v0300,1000 (comma-separated), "
+            "or leave --levels out for every hazy level"
+        )
+    return levels
 
 
 def cmd_export(args: argparse.Namespace) -> int:
