@@ -74,3 +74,14 @@ def test_true_or_false_is_not_taken_for_a_number(text: str) -> None:
     # A boolean where one is asked for, and denoise's bare on/off, still read as before.
     spec = parse_scene_text("render:\n  denoise: off\n  write_exr: false\n")
     assert spec.render.denoise == "off" and spec.render.write_exr is False
+
+
+def test_a_sequence_may_not_run_the_sea_clock_past_its_limit() -> None:
+    # A tiny --fps once sent the sea to t = 1e300 s without a word.
+    from seahaze.spec import OverrideError, SceneSpec, with_overrides
+
+    with pytest.raises(SceneFileError, match=r"q\.yaml:1: .*past the sea's limit of 1e\+06 s"):
+        parse_scene_text("sequence:\n  frames: 5\n  fps: 1.0e-300\n", file="q.yaml")
+    with pytest.raises(OverrideError, match=r"^sequence: 3 frames at 1e-300 fps end at sea time"):
+        with_overrides(SceneSpec(), frames=3, fps=1e-300)
+    with_overrides(SceneSpec(), frames=3, fps=1e-5)  # 2e5 s: within the limit

@@ -343,3 +343,16 @@ def test_a_new_export_replaces_its_own_files_and_removes_stale_ones(
     assert (out / "train" / "readme.txt").read_text() == "the user's"
     record = json.loads((out / RECORD_NAME).read_text())
     assert record["layout"] == "paired" and "train/readme.txt" not in record["files"]
+
+
+def test_a_scene_of_an_unknown_split_is_refused_not_left_out(split_dataset, tmp_path, capsys):
+    data = tmp_path / "edited"
+    shutil.copytree(split_dataset, data)
+    manifest = _manifest(data)
+    scene = sorted(manifest["scenes"])[0]
+    manifest["scenes"][scene]["split"] = "holdout"
+    (data / "dataset.json").write_text(json.dumps(manifest))
+    assert _export(data, tmp_path / "view", "paired") == 2
+    err = _one_line_error(capsys)
+    assert f"scene {scene!r} has split 'holdout'; allowed: train, val, test" in err
+    assert not (tmp_path / "view").exists()

@@ -312,3 +312,20 @@ def test_cli_newvis_short_table(tmp_path: Path, capsys: pytest.CaptureFixture[st
     err = capsys.readouterr().err.strip()
     assert err.startswith("seahaze metric newvis: error: ") and "one.csv" in err
     assert "at least 2 levels" in err
+
+
+def test_a_table_never_overwrites_a_file_seahaze_did_not_write(tmp_path) -> None:
+    table = _baseline()
+    mine = tmp_path / "t.csv"
+    mine.write_text("my own spreadsheet\n")
+    with pytest.raises(MetricInputError, match=r"t\.csv exists and is not a calibration table"):
+        save_table(table, tmp_path / "t")
+    assert mine.read_text() == "my own spreadsheet\n" and not (tmp_path / "t.json").exists()
+    other = tmp_path / "o.json"
+    other.write_text('{"format": "something else"}')
+    with pytest.raises(MetricInputError, match=r"o\.json exists"):
+        save_table(table, tmp_path / "o")
+    assert other.read_text() == '{"format": "something else"}'
+    # Its own table, written before, is replaced.
+    csv_path, json_path = save_table(table, tmp_path / "again")
+    assert save_table(table, tmp_path / "again") == (csv_path, json_path)

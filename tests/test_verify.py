@@ -181,3 +181,15 @@ def test_reference_end_to_end_is_within_its_noise(tmp_path, capsys):
     assert abs(level["measured_m"] - 1000.0) <= 4.0 * level["stderr_fit_m"]
     assert level["informative_targets"] >= 3
     assert "FAIL" in capsys.readouterr().out
+
+
+def test_denoise_without_the_denoiser_is_refused_before_rendering(tmp_path, capsys) -> None:
+    from seahaze.cli import main
+    from seahaze.render import denoise
+
+    if denoise.available():
+        pytest.skip("pyoidn is installed: the refusal cannot be seen")
+    code = main(["verify", "--denoise", "on", "--spp", "16", "--out", str(tmp_path / "v")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "pip install 'seahaze[denoise]'" in err
+    assert not (tmp_path / "v").exists()

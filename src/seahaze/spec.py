@@ -61,6 +61,11 @@ def field_bounds(info: FieldInfo) -> list[tuple[str, Any]]:
     ]
 
 
+SEA_TIME_LIMIT_S = 1.0e6
+"""Latest sea time (s) a scene or a sequence's last frame may show: beyond about 11.6 days the
+wave phases ω·t lose their float precision."""
+
+
 def _unit(unit: str) -> dict[str, str]:
     return {"unit": unit}
 
@@ -243,7 +248,7 @@ class SeaSpec(_Spec):
     time_s: float = Field(
         0.0,
         ge=0.0,
-        le=1.0e6,
+        le=SEA_TIME_LIMIT_S,
         description="Time of the wave field; sequences advance it consistently (at most about "
         "11.6 days: the wave phases ω·t keep their precision).",
         json_schema_extra=_unit("s"),
@@ -1015,6 +1020,20 @@ class SceneSpec(_Spec):
             )
         return self
 
+    @model_validator(mode="after")
+    def _sequence_within_the_sea_clock(self) -> SceneSpec:
+        # The last frame's sea time must stay within sea.time_s's own limit (a tiny fps once
+        # sent the sea to t = 1e300 s without a word).
+        if self.sequence is not None:
+            last = self.sea.time_s + self.sequence.duration_s
+            if not last <= SEA_TIME_LIMIT_S:
+                raise ValueError(
+                    f"sequence: {self.sequence.frames} frames at {self.sequence.fps:g} fps end at "
+                    f"sea time {last:.3g} s, past the sea's limit of {SEA_TIME_LIMIT_S:g} s; "
+                    "raise fps, or lower frames or sea.time_s"
+                )
+        return self
+
 
 class OverrideError(ValueError):
     """A command-line override that the schema rejects; the message is one line for the user."""
@@ -1039,7 +1058,8 @@ def with_changes(spec: SceneSpec, changes: Mapping[str, Any]) -> SceneSpec:
     except ValueError as err:
         first = err.errors()[0] if hasattr(err, "errors") else None
         where = ".".join(str(p) for p in first["loc"]) if first else ""
-        raise OverrideError(f"{where}: {first['msg'] if first else err}") from None
+        message = str(first["msg"] if first else err).removeprefix("Value error, ")
+        raise OverrideError(f"{where}: {message}" if where else message) from None
 
 
 def _merged(data: dict[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:

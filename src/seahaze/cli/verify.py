@@ -48,6 +48,13 @@ def cmd_verify(args: argparse.Namespace) -> int:
     else:
         say(f"{DEFAULT_SCENE} not found: using the built-in default sun, sky and haze")
         base = SceneSpec()
+    if args.denoise == "on":
+        from ..render import denoise
+
+        if not denoise.available():  # as `render` says it, before any work (not exit 1 after)
+            raise UsageError(
+                "--denoise on needs the optional package pyoidn: pip install 'seahaze[denoise]'"
+            )
     measurements: dict[str, verify.LevelMeasurement] = {}
     try:
         settings = verify.VerifySettings(

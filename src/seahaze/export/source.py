@@ -69,10 +69,16 @@ def open_finished(root: Path, levels: list[str] | None = None) -> SourceDataset:
     ]
     chosen = _select(known, levels, layout.manifest)
     scenes = scene_splits(data)
+    order = tuple(split_order(data))
+    # A scene of another split (a hand-edited manifest) would be left out of every folder.
+    stray = next(((name, split) for name, split in scenes.items() if split not in order), None)
+    if stray is not None:
+        raise ExportError(
+            f"{layout.manifest}: scene {stray[0]!r} has split {stray[1]!r}; allowed: "
+            f"{', '.join(order)} (it would be left out of the export)"
+        )
     _check_finished(layout, data, [CLEAN_LEVEL, *(lv.name for lv in chosen)])
-    return SourceDataset(
-        layout, tuple(chosen), scenes, tuple(split_order(data)), tuple(data["classes"])
-    )
+    return SourceDataset(layout, tuple(chosen), scenes, order, tuple(data["classes"]))
 
 
 def _read_manifest(path: Path) -> dict[str, Any]:

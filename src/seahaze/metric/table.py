@@ -305,9 +305,18 @@ def table_to_json(table: CalibrationTable) -> dict[str, object]:
 def save_table(table: CalibrationTable, out: Path | str) -> tuple[Path, Path]:
     """Write ``table`` as CSV (``visibility_m,map50``) and JSON next to each other.
 
-    Returns the two paths (see :func:`table_paths`). Parent folders are created.
+    Returns the two paths (see :func:`table_paths`). Parent folders are created. A file in the
+    way that is not a table seahaze wrote (a JSON without its format tag, a CSV without its
+    header or without that JSON beside it) is never overwritten: :class:`MetricInputError`
+    names it, nothing written.
     """
     csv_path, json_path = table_paths(out)
+    for path in (csv_path, json_path):
+        if (path.exists() or path.is_symlink()) and not _written_by_seahaze(csv_path, json_path):
+            raise MetricInputError(
+                f"{path} exists and is not a calibration table seahaze wrote; it is never "
+                "overwritten: choose another --out or move it"
+            )
     csv_path.parent.mkdir(parents=True, exist_ok=True)
     with csv_path.open("w", newline="", encoding="utf-8") as fh:
         writer = csv.writer(fh, lineterminator="\n")
@@ -316,6 +325,22 @@ def save_table(table: CalibrationTable, out: Path | str) -> tuple[Path, Path]:
             writer.writerow([f"{p.visibility_m:g}", repr(p.map50)])
     json_path.write_text(json.dumps(table_to_json(table), indent=2) + "\n", encoding="utf-8")
     return csv_path, json_path
+
+
+def _written_by_seahaze(csv_path: Path, json_path: Path) -> bool:
+    """Whether the table files at these paths are a pair seahaze wrote: regular files, the JSON
+    tagged with :data:`TABLE_FORMAT`, the CSV (if there) opening with :data:`CSV_COLUMNS`."""
+    try:
+        if json_path.is_symlink() or not json_path.is_file() or csv_path.is_symlink():
+            return False
+        if json.loads(json_path.read_text(encoding="utf-8")).get("format") != TABLE_FORMAT:
+            return False
+        if csv_path.exists():
+            with csv_path.open(encoding="utf-8", newline="") as fh:
+                return next(csv.reader(fh), None) == list(CSV_COLUMNS)
+    except (OSError, ValueError, AttributeError, UnicodeDecodeError, RecursionError):
+        return False
+    return True
 
 
 def load_table(path: Path | str) -> CalibrationTable:
