@@ -407,6 +407,15 @@ def test_cli_bad_dataset_and_layout(
     (detector_preds / "v0500" / "zzz.txt").write_text("")
     fails(["eval", "--dataset", ds, "--pred", pred], "zzz.txt: prediction for a scene that")
     (detector_preds / "v0500" / "zzz.txt").unlink()
+    # A folder under a prediction's name once scored as "no detections".
+    named = detector_preds / "v0500" / "b.txt"
+    saved = named.read_bytes() if named.is_file() else None
+    named.unlink(missing_ok=True)
+    named.mkdir()
+    fails(["eval", "--dataset", ds, "--pred", pred], "b.txt: not a file")
+    named.rmdir()
+    if saved is not None:
+        named.write_bytes(saved)
     (dataset / "labels" / "v1000" / "b.txt").write_text("0 0.5 0.5 0 0.1\n")
     fails(["eval", "--dataset", ds, "--pred", pred], "b.txt:1: box width and height must be > 0")
     (dataset / "labels" / "v1000" / "b.txt").unlink()

@@ -385,6 +385,9 @@ def load_predictions(
     out: dict[str, list[YoloBox]] = {}
     for name in sorted(wanted):
         path = folder / f"{name}.txt"
+        if path.exists() and not path.is_file():
+            # A folder (or device) under a prediction's name would score as "no detections".
+            raise located(path, "not a file: a prediction is a text file of boxes")
         out[name] = read_yolo_file(path, num_classes, with_conf=True) if path.is_file() else []
     return out
 
