@@ -20,6 +20,46 @@ def region_stats(images: list[np.ndarray], *masks: np.ndarray) -> tuple[np.ndarr
     return means.mean(axis=0), means.std(axis=0, ddof=1) / np.sqrt(len(images))
 
 
+class SkyAndSea:
+    """One small scene built twice from ``geometry`` — with Mitsuba's medium (``reference``)
+    and without (``physical``) — through ``medium`` (default: the spec's haze), and the sky and
+    sea means of the level of visibility ``visibility`` in either mode."""
+
+    def __init__(self, spec: SceneSpec, geometry: SceneGeometry, visibility: float, medium=None):
+        from seahaze.render import passes
+        from seahaze.render.scene import build_scene
+        from seahaze.visibility import channel_extinction
+
+        self.spec = spec
+        camera = Camera.from_spec(spec.camera)
+        self.scenes = {
+            mode: build_scene(
+                spec, camera, geometry, [visibility], haze_box=mode == "reference", medium=medium
+            )
+            for mode in ("reference", "physical")
+        }
+        self.geo = passes.render_geometry(self.scenes["physical"])
+        self.clean = passes.render_clean(self.scenes["physical"], 16, 1, 0.998, 0.75)
+        self.sky = np.isinf(self.geo.distance_m)
+        self.sea = ~self.sky & (self.geo.instance < 0)
+        self.sigma = channel_extinction(visibility, "koschmieder", "grey")
+
+    def means(self, mode: str, spp: int, loaded=None) -> tuple[np.ndarray, np.ndarray]:
+        """Sky and sea means per channel, (2, 3), and their standard errors over 4 seeds, of
+        ``mode``'s scene (or ``loaded``)."""
+        from seahaze.render.levels import LevelRenderer
+
+        spec = self.spec
+        loaded = loaded or self.scenes[mode]
+        renderer = LevelRenderer(mode, loaded, self.geo, self.clean, spec.haze, spec.render)
+        images = [
+            renderer.render(self.sigma, 0, spec.render.model_copy(update={"spp": spp, "seed": s}))
+            .radiance
+            for s in range(4)
+        ]
+        return region_stats(images, self.sky, self.sea)
+
+
 @pytest.fixture(autouse=True)
 def seahaze_state(tmp_path_factory, monkeypatch):
     """seahaze's state folder (the digests of the records of files it wrote into users'

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import box_vessel, flat_sea_mesh, region_stats, small_spec
+from conftest import box_vessel, flat_sea_mesh, small_spec
 from seahaze.fog_layer import FogLayer, fog_layer_medium
 from seahaze.medium import NUMPY, drjit_ops
 from seahaze.scene_medium import haze_medium
@@ -107,41 +107,19 @@ def test_physical_renders_the_fog_layer_as_volpath_does(mitsuba_variant, camera_
     """Sky and sea through a fog up to 60 m with a tenth of its density above, the camera in
     the fog or on a mast above it: `physical` (the layer as a slab in reduced height) against
     `volpath` through the layer's grid volume, within 3 % and their noise."""
-    from seahaze.camera import Camera
-    from seahaze.render import passes
-    from seahaze.render.levels import LevelRenderer
-    from seahaze.render.scene import build_scene
-    from seahaze.visibility import channel_extinction
+    from conftest import SkyAndSea
     from seahaze.world import SceneGeometry
 
     spec = small_spec(
         camera={"resolution": [48, 27], "fov_deg": 40.0, "pitch_deg": -4.0, "height_m": camera_m},
         haze={"levels": [visibility], "fog_layer": {"top_m": 60.0, "edge_m": 5.0}},
     )
-    camera = Camera.from_spec(spec.camera)
     vessel = box_vessel(0, (500.0, 30.0, 10.0), (40.0, 8.0, 20.0))
     geometry = SceneGeometry(flat_sea_mesh(), 0.05, None, [vessel])
-    scenes = {
-        mode: build_scene(spec, camera, geometry, [visibility], haze_box=mode == "reference")
-        for mode in ("reference", "physical")
-    }
-    assert isinstance(scenes["physical"].medium, FogLayer)
-    geo = passes.render_geometry(scenes["physical"])
-    clean = passes.render_clean(scenes["physical"], 16, 1, 0.998, 0.75)
-    sky = np.isinf(geo.distance_m)
-    sea = ~sky & (geo.instance < 0)
-    assert sky.sum() > 150 and sea.sum() > 150
-    sigma = channel_extinction(visibility, "koschmieder", "grey")
-
-    def region_means(mode: str, spp: int) -> tuple[np.ndarray, np.ndarray]:
-        renderer = LevelRenderer(mode, scenes[mode], geo, clean, spec.haze, spec.render)
-        batches = [
-            renderer.render(sigma, 0, spec.render.model_copy(update={"spp": spp, "seed": seed}))
-            .radiance
-            for seed in range(4)
-        ]
-        return region_stats(batches, sky, sea)
-
+    scene = SkyAndSea(spec, geometry, visibility)
+    assert isinstance(scene.scenes["physical"].medium, FogLayer)
+    assert scene.sky.sum() > 150 and scene.sea.sum() > 150
+    region_means = scene.means
     ref, ref_se = region_means("reference", 256)
     phys, phys_se = region_means("physical", 32)
     allowed = 0.03 * ref + 3.0 * np.hypot(ref_se, phys_se)

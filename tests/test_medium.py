@@ -2,9 +2,9 @@
 
 ``TwoLayers`` below is a medium defined here alone, without touching ``src/``: fog up to a
 height, thinner haze above it. It plugs into everything that asks a medium — the per-pixel
-optical depth of the ``asm`` mode, the ``reference`` mode's Mitsuba scene (a two-cell grid
-volume) and the ``physical`` mode, where it is the homogeneous slab it is in reduced height —
-and the ``physical`` and ``reference`` renders of it agree.
+optical depth of the ``asm`` mode, the ``reference`` mode's Mitsuba scene (the grid volume of
+its density that every medium gets) and the ``physical`` mode, where it is the homogeneous
+slab it is in reduced height — and the ``physical`` and ``reference`` renders of it agree.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from conftest import flat_sea_mesh, region_stats, small_spec
+from conftest import flat_sea_mesh, small_spec
 from seahaze.medium import (
     HAZE_BOTTOM_M,
     NUMPY,
@@ -77,32 +77,6 @@ class TwoLayers(HazeMedium):
         _, low = lower.reduced_length(oz, dz, t_end, ops)
         _, high = upper.reduced_length(oz, dz, t_end, ops)
         return enter, low + self.upper * high
-
-    def mitsuba_medium(self, box_min: np.ndarray, box_max: np.ndarray) -> dict[str, Any]:
-        import mitsuba as mi
-
-        # Two cells in height, nearest filtering: exact when the split is the box's middle.
-        assert abs(self.split - 0.5 * (box_min[2] + box_max[2])) < 1e-9
-        grid = np.array([1.0, self.upper], np.float32).reshape(2, 1, 1, 1)
-        to_world = mi.ScalarTransform4f().translate(box_min.tolist()).scale(
-            (box_max - box_min).tolist()
-        )
-        return {
-            "type": "heterogeneous",
-            "albedo": self.albedo,
-            "sigma_t": {
-                "type": "gridvolume",
-                "grid": mi.VolumeGrid(grid),
-                "filter_type": "nearest",
-                "to_world": to_world,
-            },
-            "scale": 0.0,
-            "phase": {"type": "hg", "g": self.g},
-        }
-
-    def mitsuba_level(self, sigma_rgb: np.ndarray, albedo: float, g: float) -> dict[str, Any]:
-        assert np.all(sigma_rgb == sigma_rgb[1]), "this toy medium is grey"
-        return {"scale": float(sigma_rgb[1]), "phase_function.g": g}
 
 
 def _numerical_length(medium: HazeMedium, oz: float, dz: np.ndarray, t_end: np.ndarray):
@@ -237,14 +211,9 @@ def test_reduced_height_and_distance_agree_with_the_reduced_length() -> None:
 def test_a_new_medium_renders_in_physical_as_in_reference(mitsuba_variant, visibility) -> None:
     """Sky and sea of a small scene with a vessel through fog below 120 m and a quarter of its
     density above: ``physical`` (the medium as a slab in reduced height, its tables traced
-    there) against Mitsuba's ``volpath`` through the two-cell grid volume, within 3 % and
+    there) against Mitsuba's ``volpath`` through its grid volume, within 3 % and
     their noise — as the uniform slab is held in tests/test_physical.py."""
-    from conftest import box_vessel
-    from seahaze.camera import Camera
-    from seahaze.render import passes
-    from seahaze.render.levels import LevelRenderer
-    from seahaze.render.scene import build_scene
-    from seahaze.visibility import channel_extinction
+    from conftest import SkyAndSea, box_vessel
     from seahaze.world import SceneGeometry
 
     toy = TwoLayers(split=120.0, upper=0.25, top=300.0)
@@ -252,39 +221,21 @@ def test_a_new_medium_renders_in_physical_as_in_reference(mitsuba_variant, visib
         camera={"resolution": [48, 27], "fov_deg": 40.0, "pitch_deg": -3.0},
         haze={"levels": [visibility]},
     )
-    camera = Camera.from_spec(spec.camera)
     vessel = box_vessel(0, (400.0, 30.0, 6.0), (40.0, 8.0, 12.0))
     geometry = SceneGeometry(flat_sea_mesh(), 0.05, None, [vessel])
-    scenes = {
-        mode: build_scene(
-            spec, camera, geometry, [visibility], haze_box=mode == "reference", medium=toy
-        )
-        for mode in ("reference", "physical")
-    }
-    geo = passes.render_geometry(scenes["physical"])
-    clean = passes.render_clean(scenes["physical"], 16, 1, 0.998, 0.75)
-    sky = np.isinf(geo.distance_m)
-    sea = ~sky & (geo.instance < 0)
-    assert sky.sum() > 200 and sea.sum() > 200
-    sigma = channel_extinction(visibility, "koschmieder", "grey")
-
-    def region_means(mode: str, spp: int, loaded=None) -> tuple[np.ndarray, np.ndarray]:
-        """Sky and sea means per channel, (2, 3), and their standard errors from 4 seeds."""
-        loaded = loaded or scenes[mode]
-        renderer = LevelRenderer(mode, loaded, geo, clean, spec.haze, spec.render)
-        batches = [
-            renderer.render(sigma, 0, spec.render.model_copy(update={"spp": spp, "seed": seed}))
-            .radiance
-            for seed in range(4)
-        ]
-        return region_stats(batches, sky, sea)
-
+    scene = SkyAndSea(spec, geometry, visibility, toy)
+    assert scene.sky.sum() > 200 and scene.sea.sum() > 200
+    region_means = scene.means
     ref, ref_se = region_means("reference", 256)
     phys, phys_se = region_means("physical", 32)
     allowed = 0.03 * ref + 3.0 * np.hypot(ref_se, phys_se)
     assert np.all(np.abs(phys - ref) <= allowed), (phys / ref - 1.0, allowed / ref)
     # The test can tell the media apart: through the uniform slab the same level differs
     # from the reference by more than twice what this test allows.
+    from seahaze.camera import Camera
+    from seahaze.render.scene import build_scene
+
+    camera = Camera.from_spec(spec.camera)
     uniform = build_scene(spec, camera, geometry, [visibility], haze_box=False)
     slab, _ = region_means("physical", 32, uniform)
     assert np.any(np.abs(slab - ref) > 2.0 * allowed), (slab / ref - 1.0, allowed / ref)

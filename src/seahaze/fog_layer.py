@@ -36,9 +36,6 @@ from .medium import HAZE_BOTTOM_M, NUMPY, ArrayOps, HazeMedium, HomogeneousSlab
 
 NEWTON_STEPS = 6
 """Newton steps of the reduced height's inverse."""
-GRID_CELLS = 1024
-"""Height cells of the ``reference`` mode's grid volume: linear interpolation between them is
-within 1e-4 of the profile for an edge of 1 m or more in a haze up to 5 km."""
 
 
 def _softplus(x: Any, ops: ArrayOps) -> Any:
@@ -132,51 +129,12 @@ class FogLayer(HazeMedium):
         flat = ops.abs(dz * reduced) < 1e-2 * self.edge * self.scale * self.above
         return ops.select(flat, level, climbed)
 
-    def mitsuba_medium(self, box_min: np.ndarray, box_max: np.ndarray) -> dict[str, Any]:
-        import mitsuba as mi
-
-        to_world = mi.ScalarTransform4f().translate(box_min.tolist()).scale(
-            (box_max - box_min).tolist()
-        )
-        return {
-            "type": "heterogeneous",
-            "albedo": self.albedo,
-            "sigma_t": {
-                "type": "gridvolume",
-                "grid": mi.VolumeGrid(self._grid(box_min[2], box_max[2], np.ones(3))),
-                "filter_type": "trilinear",
-                "to_world": to_world,
-            },
-            "scale": 1.0,
-            "phase": {"type": "hg", "g": self.g},
-        }
-
-    def mitsuba_level(self, sigma_rgb: np.ndarray, albedo: float, g: float) -> dict[str, Any]:
-        import mitsuba as mi
-
-        bottom, top = self.bottom, self.top
-        grid = self._grid(bottom, top, np.asarray(sigma_rgb, np.float64))
-        return {
-            "sigma_t.data": mi.TensorXf(grid),
-            "albedo.value.value": albedo,
-            "phase_function.g": g,
-        }
-
-    def _grid(self, bottom: float, top: float, rgb: np.ndarray) -> np.ndarray:
-        """(cells, 1, 1, 3) float32: the density at the centres of :data:`GRID_CELLS` height
-        cells over ``[bottom, top]``, times ``rgb``."""
-        z = bottom + (np.arange(GRID_CELLS) + 0.5) / GRID_CELLS * (top - bottom)
-        rho = self._profile(z, NUMPY)
-        return (rho[:, None] * rgb[None, :]).astype(np.float32).reshape(GRID_CELLS, 1, 1, 3)
-
     def describe(self) -> dict[str, Any]:
         return {
             **super().describe(),
             "fog_top_m": self.fog_top,
             "edge_m": self.edge,
             "above_ratio": self.above,
-            "bottom_m": self.bottom,
-            "top_m": self.top,
             "density_scale": self.scale,
         }
 

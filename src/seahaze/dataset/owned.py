@@ -112,6 +112,9 @@ class OwnedFiles:
     info: dict[str, Any] = field(default_factory=dict)
     ignored: list[str] = field(default_factory=list)
     """Why record entries were not trusted (one line each), for the caller to report."""
+    folders: dict[str, bool] = field(default_factory=dict, repr=False)
+    """Folder → whether it resolves inside the root, for the call in progress (:meth:`check`
+    and :meth:`release` start afresh: the folders may have changed since)."""
 
     @property
     def record(self) -> Path:
@@ -172,6 +175,8 @@ class OwnedFiles:
     def check(self, relative: Iterable[str]) -> None:
         """Raise :class:`ForeignFileError` naming the first of ``relative`` that exists in the
         folder without being seahaze's (and how many there are)."""
+        relative = list(relative)
+        self.folders.clear()
         foreign = sorted(
             rel for rel in relative if _exists(self.root / rel) and not self.is_ours(rel)
         )
@@ -211,6 +216,7 @@ class OwnedFiles:
         that is not ours as it stands (:meth:`is_ours`) is left alone. Returns what was left
         alone, one line each."""
         kept = []
+        self.folders.clear()
         for rel in sorted(set(relative) & set(self.files)):
             path = self.root / rel
             if self.is_ours(rel):
@@ -222,10 +228,12 @@ class OwnedFiles:
         return kept
 
     def _inside(self, rel: str) -> bool:
-        """Whether the folder of ``rel`` resolves, links followed, inside the root."""
-        root = self.root.resolve()
-        parent = (self.root / rel).parent.resolve()
-        return parent == root or parent.is_relative_to(root)
+        """Whether the folder of ``rel`` resolves, links followed, inside the root. Resolved
+        once per folder and call: an export's thousands of files share a few folders."""
+        folder = str(PurePosixPath(rel).parent)
+        if folder not in self.folders:
+            self.folders[folder] = _resolves_inside(self.root, folder)
+        return self.folders[folder]
 
     def _write(self) -> None:
         files = {rel: list(ident) if ident else None for rel, ident in sorted(self.files.items())}
@@ -241,6 +249,13 @@ def _written_here(root: Path, raw: bytes) -> bool:
     except (OSError, UnicodeDecodeError):
         return False
     return kept == hashlib.sha256(raw).hexdigest()
+
+
+def _resolves_inside(root: Path, folder: str) -> bool:
+    """Whether ``root/folder`` resolves, links followed, inside ``root`` resolved."""
+    inside = root.resolve()
+    resolved = (root / folder).resolve()
+    return resolved == inside or resolved.is_relative_to(inside)
 
 
 def _entries(files: Any) -> list[tuple[Any, Identity | None]]:

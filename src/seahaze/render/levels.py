@@ -92,7 +92,8 @@ class LevelRenderer:
             airlight = passes.render_airlight(
                 loaded, sigma, haze.albedo, haze.g, render.airlight_spp, render.seed, level_index
             )
-            medium = self.loaded.medium.with_optics(haze.albedo, haze.g)
+            # Only the medium's shape enters the optical depth (its optics are the airlight's).
+            medium = loaded.medium
             radiance = passes.asm_level(self.clean, self.geometry, sigma, airlight.rgb, medium)
             return LevelRender(radiance, airlight)
         # Physical: one pass from the scene's camera paths (whatever the level index), so a
