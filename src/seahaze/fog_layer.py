@@ -20,8 +20,9 @@ Reduced height and its inverse
     ``sp(x) = ln(1 + eˣ)``, in closed form; :mod:`seahaze.medium` explains why that is all the
     ``physical`` mode needs. Its inverse has no closed form: Newton's method from the inverse of
     the sharp-edged profile. ``h`` is concave (the density falls with height), so after one
-    step every iterate lies below the root and climbs to it monotonically;
-    :data:`NEWTON_STEPS` steps reach float32 precision (tests/test_fog_layer.py).
+    step every iterate lies below the root and climbs to it monotonically; after
+    :data:`NEWTON_STEPS` steps tests/test_fog_layer.py holds the inverse to 1e-9 m in float64
+    and 2 mm in float32.
 """
 
 from __future__ import annotations

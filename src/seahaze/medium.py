@@ -57,9 +57,11 @@ TINY_OPTICAL_DEPTH = 1e-3
 """Below this, ``1 − e^{−τ}`` is evaluated by its series (float32 cancellation)."""
 GRID_CELLS = 1024
 """Height cells of the ``reference`` mode's grid volume of a medium's density
-(:meth:`HazeMedium.mitsuba_medium`): linear interpolation between their centres is within 1e-4
-of a profile that changes over a metre or more in a haze up to 5 km, and a sharp step between
-two cells keeps every ray's optical depth (the ramp is symmetric about it)."""
+(:meth:`HazeMedium.mitsuba_medium`), interpolated linearly between their centres: a profile
+that changes over a few cells is smeared over them, and a sharp step at a cell boundary keeps a
+ray's optical depth (the ramp is symmetric about it). How close the grid comes to a fog layer
+is measured in docs/benchmarks.md ("How closely does the reference's grid volume follow a fog
+layer?")."""
 
 
 @dataclass(frozen=True)
