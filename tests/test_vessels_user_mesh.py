@@ -9,7 +9,7 @@ import pytest
 import trimesh
 from trimesh.visual.material import PBRMaterial, SimpleMaterial
 
-from seahaze.vessels import Material, load_user_mesh
+from seahaze.vessels import Material, SubmergedMeshError, load_user_mesh
 from seahaze.vessels.user_mesh import DEFAULT_DRAFT_FRACTION, axes_rotation
 
 ASSET = Path(__file__).resolve().parents[1] / "assets" / "test" / "box_boat.obj"
@@ -122,6 +122,16 @@ def test_override_material_and_explicit_draft(tmp_path: Path) -> None:
     assert model.parts[0].material == paint
     assert model.bounds()[0, 2] == pytest.approx(-1.5)
     assert model.draft_m == 1.5
+
+
+def test_a_draft_that_sinks_the_whole_mesh_is_refused(tmp_path: Path) -> None:
+    boat = write_box_boat(tmp_path / "boat.stl")
+    height = BOAT_HEIGHT * 20.0 / BOAT_LENGTH  # the box boat scaled to 20 m: 5.4 m high
+    with pytest.raises(SubmergedMeshError, match=r"allowed: 0 <= draft_m < 5\.4") as info:
+        load_user_mesh(boat, "tug", 20.0, "+y", "-z", draft_m=height + 0.05)
+    assert info.value.height_m == pytest.approx(height)
+    almost = load_user_mesh(boat, "tug", 20.0, "+y", "-z", draft_m=height - 0.1)
+    assert almost.air_draft_m == pytest.approx(0.1)
 
 
 def test_uncoloured_stl_gets_a_default_paint(tmp_path: Path) -> None:

@@ -107,6 +107,12 @@ BAD_MESHES = [
     ),
     ("path: x.obj, scale_m: 0", 5, "vessels.placed[0].mesh.scale_m", ["greater than 0", "in m"]),
     ("scale_m: 20", 5, "vessels.placed[0].mesh.path", ["required"]),
+    (  # a 7 m workboat is about 2.8 m high: 50 m of draft hides all of it (and its label)
+        f"path: {WORKBOAT}, scale_m: 7, draft_m: 50",
+        5,
+        "vessels.placed[0].mesh.draft_m",
+        ["draft_m 50 m sinks the whole mesh", "allowed: 0 <= draft_m <"],
+    ),
 ]
 
 

@@ -348,6 +348,7 @@ def _resolve_user_meshes(
     from .vessels import (
         CLASS_NAMES,
         SUPPORTED_FORMATS,
+        SubmergedMeshError,
         load_user_mesh,
         mesh_search_dirs,
         resolve_mesh_path,
@@ -396,6 +397,10 @@ def _resolve_user_meshes(
                     mesh.forward_axis,
                     draft_m=mesh.draft_m,
                 )
+            except SubmergedMeshError as exc:
+                draft_loc: Loc = ("vessels", "placed", i, "mesh", "draft_m")
+                problems.append(problem(str(exc), draft_loc))
+                continue
             except Exception as exc:  # trimesh raises many types; each is a located message
                 text = str(exc).strip()
                 reason = text.splitlines()[0] if text else type(exc).__name__

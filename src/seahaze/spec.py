@@ -325,7 +325,8 @@ class UserMeshSpec(_Spec):
         None,
         ge=0.0,
         le=50.0,
-        description="Depth of the lowest point below the waterline; default 10 % of the "
+        description="Depth of the lowest point below the waterline, less than the scaled "
+        "height (a mesh sunk whole could be neither seen nor labelled); default 10 % of the "
         "scaled height.",
         json_schema_extra=_unit("m"),
     )

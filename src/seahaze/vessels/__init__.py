@@ -37,6 +37,7 @@ from seahaze.vessels.materials import Material
 from seahaze.vessels.model import VesselModel, VesselPart
 from seahaze.vessels.user_mesh import (
     SUPPORTED_FORMATS,
+    SubmergedMeshError,
     load_user_mesh,
     mesh_search_dirs,
     resolve_mesh_path,
@@ -53,6 +54,7 @@ __all__ = [
     "Material",
     "PlacedPart",
     "Placement",
+    "SubmergedMeshError",
     "VesselClass",
     "VesselModel",
     "VesselPart",

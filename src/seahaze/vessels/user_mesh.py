@@ -134,6 +134,19 @@ def _load_geometries(path: Path) -> list[tuple[str, trimesh.Trimesh]]:
     return named
 
 
+class SubmergedMeshError(ValueError):
+    """A user mesh whose draft is not less than its scaled height: sunk that deep, nothing of
+    it stays above the waterline, so it could be neither seen nor labelled."""
+
+    def __init__(self, draft_m: float, height_m: float):
+        self.draft_m, self.height_m = draft_m, height_m
+        super().__init__(
+            f"draft_m {draft_m:g} m sinks the whole mesh (its scaled height is {height_m:.3g} m): "
+            f"nothing would stay above the waterline to see or label; allowed: "
+            f"0 <= draft_m < {height_m:.3g}"
+        )
+
+
 def load_user_mesh(
     path: str | Path,
     kind: str,
@@ -149,7 +162,8 @@ def load_user_mesh(
     ``kind`` is the class label it is annotated with (one of :data:`CLASS_NAMES`);
     ``scale_m`` the overall length (m) after scaling. Raises FileNotFoundError for a missing
     file and ValueError for an unsupported format, an unreadable or empty mesh, bad axes,
-    an unknown kind or a non-positive scale/draft.
+    an unknown kind or a non-positive scale/draft, and :class:`SubmergedMeshError` (a
+    ValueError) for a draft that sinks the whole mesh.
     """
     path = Path(path)
     if kind not in CLASS_NAMES:
@@ -178,6 +192,8 @@ def load_user_mesh(
     factor = scale_m / extent[0]
     height = extent[2] * factor
     draft = DEFAULT_DRAFT_FRACTION * height if draft_m is None else float(draft_m)
+    if draft >= height:
+        raise SubmergedMeshError(draft, height)
     shift = -np.array([0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), lo[2]]) * factor
     shift[2] -= draft
 
