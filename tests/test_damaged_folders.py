@@ -272,9 +272,7 @@ def test_force_deletes_only_the_files_the_old_manifest_lists(scene, finished, tm
     assert (out / "images/v2000/dmg.png").exists()
 
 
-def test_force_deletes_nothing_through_a_level_folder_that_leads_outside(
-    scene, finished, tmp_path
-):
+def test_force_deletes_nothing_through_a_level_folder_that_leads_outside(scene, finished, tmp_path):
     out = _copy(finished, tmp_path)
     elsewhere = tmp_path / "photos"
     shutil.move(out / "exr" / "v1000", elsewhere)  # the same names, outside the dataset
@@ -342,3 +340,94 @@ def test_openexr_write_failure_stops_the_batch_like_a_full_disk(
     monkeypatch.setattr(OpenEXR, "File", real)
     assert _rerun(scene, out)[0] == 0
     assert (out / FILES[0]).read_bytes() == (finished / FILES[0]).read_bytes()
+
+
+SECOND_SCENE = SCENE.replace("name: dmg", "name: other").replace(
+    "distance_m: 120", "distance_m: 90"
+)
+
+
+@pytest.fixture(scope="module")
+def two_scenes(scene, tmp_path_factory) -> tuple[list[Path], Path]:
+    """A finished dataset of two scenes of the same size, levels and files."""
+    other = scene.parent / "other.yaml"
+    other.write_text(SECOND_SCENE)
+    out = tmp_path_factory.mktemp("two") / "ds"
+    code, _, err = _run(["render", str(scene), str(other), "--out", str(out), "--quiet"])
+    assert code == 0, err
+    return [scene, other], out
+
+
+def _swap(a: Path, b: Path) -> None:
+    data = a.read_bytes()
+    a.write_bytes(b.read_bytes())
+    b.write_bytes(data)
+
+
+def test_resume_rerenders_scenes_whose_pngs_were_swapped(two_scenes, tmp_path):
+    """Each swapped PNG passes the cheap check (right size, a valid PNG); the content hash
+    recorded at write time finds it, and the rerun brings back the original bytes."""
+    from seahaze.batch.folder import scene_file_problem
+    from seahaze.dataset import Layout
+
+    scenes, finished = two_scenes
+    out = _copy(finished, tmp_path)
+    a, b = out / "images/clean/dmg.png", out / "images/clean/other.png"
+    assert a.read_bytes() != b.read_bytes()
+    _swap(a, b)
+    for name in ("dmg", "other"):
+        assert scene_file_problem(Layout(out), name, ["v1000"], True, (32, 18)) is None
+    code, stdout, err = _run(["render", *map(str, scenes), "--out", str(out), "--quiet"])
+    assert code == 0, err
+    assert err.count("content hash differs") == 2 and "wrote 2 scene(s)" in stdout
+    for path in sorted(finished.rglob("*")):
+        if path.is_file() and path.name != "data.yaml":
+            rel = path.relative_to(finished)
+            assert (out / rel).read_bytes() == path.read_bytes(), rel
+
+
+def test_a_finished_scene_records_the_hash_of_its_files(two_scenes):
+    """files_sha256 is the SHA-256 of (relative path, SHA-256 of the file) lines, computed here
+    independently from the files on disk."""
+    import hashlib
+
+    _, out = two_scenes
+    record = json.loads((out / "dataset.json").read_text())["scenes"]["dmg"]
+    lines = "".join(
+        f"{rel}\0{hashlib.sha256((out / rel).read_bytes()).hexdigest()}\n"
+        for rel in ["meta/dmg.json", "depth/dmg.exr"]
+        + [
+            f"{kind}/{level}/dmg.{ext}"
+            for level in ("clean", "v1000")
+            for kind, ext in (("images", "png"), ("labels", "txt"), ("exr", "exr"))
+        ]
+    )
+    assert record["files_sha256"] == hashlib.sha256(lines.encode()).hexdigest()
+
+
+@pytest.mark.parametrize(
+    ("recorded", "rerendered"),
+    [(None, False), ("0" * 64, True), ("not a hash", True), (["a list"], True)],
+)
+def test_a_record_without_a_valid_hash(scene, finished, tmp_path, recorded, rerendered):
+    """No hash (a dataset made before seahaze kept one): the intact scene is kept and gets the
+    hash of its files; a wrong or malformed hash: the scene is rendered again."""
+    out = _copy(finished, tmp_path)
+    good = json.loads((out / "dataset.json").read_text())["scenes"]["dmg"]["files_sha256"]
+
+    def edit(data: dict) -> None:
+        entry = data["scenes"]["dmg"]
+        if recorded is None:
+            del entry["files_sha256"]
+        else:
+            entry["files_sha256"] = recorded
+
+    _manifest_edit(edit)(out)
+    code, stdout, err = _rerun(scene, out)
+    assert code == 0, err
+    assert ("rendering it again" in err) == rerendered
+    assert ("nothing to render" in stdout) == (not rerendered)
+    assert json.loads((out / "dataset.json").read_text())["scenes"]["dmg"]["files_sha256"] == good
+    for rel in FILES:
+        if rel != "data.yaml":
+            assert (out / rel).read_bytes() == (finished / rel).read_bytes(), rel

@@ -10,6 +10,7 @@ folder" (docs/batches.md).
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import os
 import re
@@ -19,6 +20,7 @@ from typing import Any
 
 from .. import fileio
 from ..dataset import FORMAT_VERSION, Layout
+from ..dataset.manifest import BOOKKEEPING_KEYS
 from ..spec import SceneSpec
 from ..visibility import CLEAN_LEVEL, is_level_name
 from .errors import ForeignFolderError
@@ -248,8 +250,9 @@ unbounded in issue #19 without changing a ``physical`` dataset)."""
 
 
 def comparable(entry: dict[str, Any]) -> dict[str, Any]:
-    """A scene's manifest entry without its state and the settings its mode never reads."""
-    out = {k: v for k, v in entry.items() if k not in ("status", "error")}
+    """A scene's manifest entry without its bookkeeping (state, error, content hash) and the
+    settings its mode never reads."""
+    out = {k: v for k, v in entry.items() if k not in BOOKKEEPING_KEYS}
     config = out.get("config")
     if isinstance(config, dict):
         mode = (config.get("render") or {}).get("mode")
@@ -372,6 +375,28 @@ def scene_file_problem(
         problem = file_problem(path, scene, size)
         if problem is not None:
             return f"{path.relative_to(layout.root)} {problem}"
+    return None
+
+
+def scene_digest(layout: Layout, scene: str, levels: list[str], exr: bool) -> str:
+    """The SHA-256 of every file of a scene (:meth:`Layout.scene_files`), each named by its
+    path relative to the dataset: what the manifest's ``files_sha256`` records when the scene
+    is written and what resume compares before keeping it. Raises OSError for a file that
+    cannot be read."""
+    combined = hashlib.sha256()
+    for path in layout.scene_files(scene, levels, exr):
+        with open(path, "rb") as handle:
+            content = hashlib.file_digest(handle, "sha256").hexdigest()
+        combined.update(f"{path.relative_to(layout.root).as_posix()}\0{content}\n".encode())
+    return combined.hexdigest()
+
+
+def recorded_digest(entry: dict[str, Any]) -> str | None:
+    """A scene record's ``files_sha256`` when it is one (64 lowercase hex digits), else None:
+    the manifest is data from disk."""
+    value = entry.get("files_sha256")
+    if isinstance(value, str) and re.fullmatch(r"[0-9a-f]{64}", value):
+        return value
     return None
 
 

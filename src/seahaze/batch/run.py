@@ -57,7 +57,9 @@ from .folder import (
     inspect_folder,
     keep_damaged,
     prune,
+    recorded_digest,
     remove_temporaries,
+    scene_digest,
     scene_file_problem,
     stray_files,
     with_current_defaults,
@@ -138,6 +140,8 @@ class SceneLedger:
     errors: dict[str, str] = field(default_factory=dict)
     rendered: list[str] = field(default_factory=list)
     """Scenes rendered by this run, in the order they finished."""
+    digests: dict[str, str] = field(default_factory=dict)
+    """Scene name → the content hash of its files (``files_sha256``) of the done scenes."""
 
     @property
     def jobs(self) -> dict[str, SceneJob]:
@@ -154,6 +158,8 @@ class SceneLedger:
             scenes[job.name] = job.entry(self.status[job.name])
             if job.name in self.errors:
                 scenes[job.name]["error"] = self.errors[job.name]
+            if self.status[job.name] == "done" and job.name in self.digests:
+                scenes[job.name]["files_sha256"] = self.digests[job.name]
         return manifest(self.plan.config(), self.levels, CLASS_NAMES, scenes)
 
     def write_manifest(self) -> None:
@@ -162,6 +168,11 @@ class SceneLedger:
 
     def done(self) -> int:
         return sum(s == "done" for s in self.status.values())
+
+    def digest_of(self, job: SceneJob) -> str:
+        """The content hash of ``job``'s files as they are now (OSError when unreadable)."""
+        levels = [level_name(v) for v in job.spec.haze.levels]
+        return scene_digest(self.layout, job.name, levels, job.spec.render.write_exr)
 
 
 def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) -> SceneLedger:
@@ -324,7 +335,10 @@ def _mark_done_scenes(
     planned_scenes: dict[str, Any],
     reporter: Reporter,
 ) -> None:
-    """Mark ``done`` the scenes the folder holds, finished, with the planned config."""
+    """Mark ``done`` the scenes the folder holds, finished, with the planned config, and
+    whose files are the ones seahaze wrote: intact, and with the content hash recorded when
+    they were written (a file swapped with another scene's has its size and header right).
+    A record without a hash (made before seahaze kept one) gets the hash of the files now."""
     for job in ledger.plan.jobs:
         old = old_scenes.get(job.name) or {}
         # A scene's split is bookkeeping, not rendering: a new split keeps its files.
@@ -337,10 +351,30 @@ def _mark_done_scenes(
         exr, size = job.spec.render.write_exr, job.spec.camera.resolution
         problem = scene_file_problem(ledger.layout, job.name, levels, exr, size)
         if problem is None:
+            problem, digest = _content_problem(ledger, job, old)
+        if problem is None:
             ledger.status[job.name] = "done"
+            ledger.digests[job.name] = digest
         else:
             reporter.warn(f"scene {job.name} is marked done but {problem}: rendering it again")
     ledger.done_before = ledger.done()
+
+
+def _content_problem(
+    ledger: SceneLedger, job: SceneJob, old: dict[str, Any]
+) -> tuple[str | None, str]:
+    """Whether a finished scene's files still hash to what its record says: (problem or
+    None, their hash now)."""
+    try:
+        digest = ledger.digest_of(job)
+    except OSError as err:
+        return f"a file of it cannot be read ({err.strerror or err})", ""
+    recorded = recorded_digest(old)
+    if "files_sha256" in old and recorded is None:
+        return "its record's files_sha256 is not a SHA-256", digest
+    if recorded is not None and recorded != digest:
+        return "its files are not the ones seahaze wrote (their content hash differs)", digest
+    return None, digest
 
 
 Stop = tuple[str, str]
@@ -406,6 +440,10 @@ def _record(
         ledger.status[job.name] = "done"
         ledger.errors.pop(job.name, None)
         ledger.rendered.append(job.name)
+        try:
+            ledger.digests[job.name] = ledger.digest_of(job)
+        except OSError as err:  # the files just written cannot be read back
+            return stop or ("write_error", f"cannot read back scene {job.name}: {err}")
         reporter.scene_done(job, outcome.timings.get("total", 0.0), outcome.timings)
     try:
         ledger.write_manifest()

@@ -82,14 +82,20 @@ def split_list_text(scenes: Sequence[str]) -> str:
     return "".join(f"./images/{CLEAN_LEVEL}/{scene}.png\n" for scene in scenes)
 
 
+BOOKKEEPING_KEYS = ("status", "error", "files_sha256")
+"""Keys of a scene's manifest record that say where its rendering stands, not what it is made
+from: its state, the error it failed with, and the content hash of the files it was written
+with (``files_sha256``, which resume checks before keeping a finished scene)."""
+
+
 def config_hash(data: dict[str, Any]) -> str:
     """A short SHA-256 of what a dataset's content depends on: the manifest's format version,
-    config, levels, classes and every scene's record (without its ``status`` and ``error``).
+    config, levels, classes and every scene's record (without :data:`BOOKKEEPING_KEYS`).
 
     Two folders with the same hash were made from the same configuration.
     """
     scenes = {
-        name: {k: v for k, v in entry.items() if k not in ("status", "error")}
+        name: {k: v for k, v in entry.items() if k not in BOOKKEEPING_KEYS}
         for name, entry in (data.get("scenes") or {}).items()
     }
     content = {key: data.get(key) for key in ("format_version", "config", "levels", "classes")}
