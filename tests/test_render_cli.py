@@ -137,6 +137,51 @@ def test_preview_writes_a_contact_sheet(dataset, tmp_path):
     assert Image.open(out).size == (128, 36)
 
 
+PREVIEW_ARGS = ["--levels", "clean,v0300", "--columns", "2", "--tile-width", "64"]
+
+
+@pytest.mark.parametrize("name", ["sheet.png", "sheet.jpg", "sheet.gif"])
+def test_preview_replaces_its_own_sheet_and_never_a_users_file(dataset, tmp_path, capsys, name):
+    out = tmp_path / name
+    args = ["preview", str(dataset), *PREVIEW_ARGS, "--out", str(out)]
+    assert main(args) == 0
+    first = out.read_bytes()
+    assert main(args) == 0  # its own preview: replaced, with the same bytes
+    assert out.read_bytes() == first
+    capsys.readouterr()
+    # A user's image of the same name and format, a link and a folder are left alone.
+    Image.new("RGB", (8, 8), (200, 10, 10)).save(out)
+    mine = out.read_bytes()
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert f"--out {out}: a file seahaze did not write" in err and "another name" in err
+    assert len(err.strip().splitlines()) == 1 and out.read_bytes() == mine
+    target = tmp_path / "elsewhere.png"
+    target.write_bytes(b"mine")
+    out.unlink()
+    out.symlink_to(target)
+    assert main(args) == 2 and "a symbolic link" in capsys.readouterr().err
+    assert target.read_bytes() == b"mine" and out.is_symlink()
+    out.unlink()
+    out.mkdir()
+    assert main(args) == 2 and "a folder" in capsys.readouterr().err
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_default_preview_in_the_dataset_keeps_a_users_preview_png(dataset, tmp_path, capsys):
+    import shutil
+
+    root = tmp_path / "ds"
+    shutil.copytree(dataset, root)
+    (root / "preview.png").write_bytes(b"my notes, not an image")
+    assert main(["preview", str(root), *PREVIEW_ARGS]) == 2
+    assert (root / "preview.png").read_bytes() == b"my notes, not an image"
+    assert "preview.png: a file seahaze did not write" in capsys.readouterr().err
+    other = tmp_path / "mine.png"
+    assert main(["preview", str(root), *PREVIEW_ARGS, "--out", str(other)]) == 0
+    assert Image.open(other).size == (128, 36)
+
+
 def test_preview_rejects_unknown_level(dataset, capsys):
     assert main(["preview", str(dataset), "--levels", "v9999"]) == 2
     assert "not in" in capsys.readouterr().err

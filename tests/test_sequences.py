@@ -768,6 +768,11 @@ def test_mp4_preview_decodes_to_the_frames_contact_sheets(reference, tmp_path):
     assert main([*args, "--out", str(again)]) == 0
     assert again.read_bytes() == out.read_bytes()
     assert main([*args, "--out", str(tmp_path / "seq.avi")]) == 2
+    # Its own MP4 is replaced; a user's video of the same name is not.
+    assert main([*args, "--out", str(out)]) == 0 and out.read_bytes() == again.read_bytes()
+    (tmp_path / "holiday.mp4").write_bytes(b"\x00\x00\x00\x18ftypmp42 a user's video")
+    assert main([*args, "--out", str(tmp_path / "holiday.mp4")]) == 2
+    assert (tmp_path / "holiday.mp4").read_bytes().endswith(b"a user's video")
 
 
 def test_mp4_preview_without_the_video_extra_is_a_one_line_error(

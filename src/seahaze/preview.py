@@ -8,11 +8,14 @@ wheel: ``pip install 'seahaze[video]'``), chosen by the output file's extension
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+from typing import Any
 
 from PIL import Image, ImageDraw
 
 from .dataset import Layout
+from .fileio import atomic_target
 from .visibility import CLEAN_LEVEL
 
 BOX_COLOUR = (255, 210, 0)
@@ -23,8 +26,70 @@ MP4_CRF = 18
 """x264 constant rate factor of an MP4 preview: 18 is visually lossless for most content."""
 
 
+PREVIEW_MARK = "seahaze preview"
+"""Written into every preview file (PNG ``Software`` text, GIF and JPEG comment, MP4 comment
+metadata): a later preview overwrites only a file that carries it."""
+_MARK_SCAN_BYTES = 1 << 20
+"""How much of each end of an MP4 is searched for the mark (ffmpeg writes it in the ``moov``
+box, at the end of the file)."""
+
+
 class PreviewError(ValueError):
     """A dataset folder that cannot be previewed; the message is for the user."""
+
+
+def written_by_preview(path: Path) -> bool:
+    """Whether ``path`` is a plain file a seahaze preview wrote (it carries
+    :data:`PREVIEW_MARK`)."""
+    if path.is_symlink() or not path.is_file():
+        return False
+    mark = PREVIEW_MARK.encode()
+    if path.suffix.lower() == ".mp4":
+        with open(path, "rb") as handle:
+            head = handle.read(_MARK_SCAN_BYTES)
+            handle.seek(max(path.stat().st_size - _MARK_SCAN_BYTES, 0))
+            return mark in head or mark in handle.read()
+    try:
+        with Image.open(path) as image:
+            info = dict(image.info)
+    except (OSError, ValueError, Image.DecompressionBombError):
+        return False
+    values = [info.get("Software"), info.get("comment")]
+    return any(v in (PREVIEW_MARK, mark) for v in values)
+
+
+def check_overwrite(out: Path) -> None:
+    """Raise :class:`PreviewError` unless ``out`` is free or a preview seahaze wrote: a user's
+    file of the same name is never overwritten (nor a link followed)."""
+    if (out.exists() or out.is_symlink()) and not written_by_preview(out):
+        what = "a symbolic link" if out.is_symlink() else "a file seahaze did not write"
+        if out.is_dir() and not out.is_symlink():
+            what = "a folder"
+        raise PreviewError(
+            f"--out {out}: {what} is there, and a preview never replaces it; "
+            "choose another name with --out"
+        )
+
+
+def save_sheet(sheet: Image.Image, out: Path) -> None:
+    """Write a contact sheet, marked as a seahaze preview (PNG text chunk, JPEG comment),
+    atomically: a failed write leaves any earlier preview whole. The format follows the
+    extension (any Pillow writes; one without a mark can be written but never replaced)."""
+    from PIL import PngImagePlugin
+
+    suffix = out.suffix.lower()
+    options: dict[str, Any] = {}
+    if suffix == ".png":
+        text = PngImagePlugin.PngInfo()
+        text.add_text("Software", PREVIEW_MARK)
+        options["pnginfo"] = text
+    elif suffix in (".jpg", ".jpeg", ".gif"):
+        options["comment"] = PREVIEW_MARK
+    image_format = Image.registered_extensions().get(suffix)
+    if image_format is None:
+        raise PreviewError(f"--out {out}: {suffix or 'no extension'} is not an image format")
+    with atomic_target(out) as tmp:
+        sheet.save(tmp, format=image_format, **options)
 
 
 def _manifest(root: Path) -> dict:
@@ -168,9 +233,17 @@ def save_gif(sheets: list[Image.Image], out: Path, fps: float) -> None:
     delay_ms = max(20, round(1000.0 / fps / 10.0) * 10)
     # One adaptive palette per frame: sky and sea gradients band least that way.
     frames = [sheet.convert("P", palette=Image.Palette.ADAPTIVE, colors=255) for sheet in sheets]
-    frames[0].save(
-        out, save_all=True, append_images=frames[1:], duration=delay_ms, loop=0, disposal=1
-    )
+    with atomic_target(out) as tmp:
+        frames[0].save(
+            tmp,
+            format="GIF",
+            save_all=True,
+            append_images=frames[1:],
+            duration=delay_ms,
+            loop=0,
+            disposal=1,
+            comment=PREVIEW_MARK,
+        )
 
 
 def save_mp4(sheets: list[Image.Image], out: Path, fps: float) -> None:
@@ -190,6 +263,17 @@ def save_mp4(sheets: list[Image.Image], out: Path, fps: float) -> None:
         ) from None
     import numpy as np
 
+    with atomic_target(out) as tmp:
+        encoded = tmp.with_name(f"{tmp.name}.mp4")  # imageio picks its writer by extension
+        try:
+            _encode_mp4(imageio, np, sheets, encoded, fps)
+            os.replace(encoded, tmp)
+        finally:
+            encoded.unlink(missing_ok=True)
+
+
+def _encode_mp4(imageio: Any, np: Any, sheets: list[Image.Image], out: Path, fps: float) -> None:
+    """Encode ``sheets`` into the ``.mp4`` file ``out``."""
     width, height = sheets[0].size
     even = (width + width % 2, height + height % 2)
     writer = imageio.get_writer(
@@ -202,7 +286,10 @@ def save_mp4(sheets: list[Image.Image], out: Path, fps: float) -> None:
         quality=None,
         macro_block_size=2,
         ffmpeg_log_level="error",
-        ffmpeg_params=["-crf", str(MP4_CRF), "-threads", "1", "-preset", "medium"],
+        ffmpeg_params=[
+            *("-crf", str(MP4_CRF), "-threads", "1", "-preset", "medium"),
+            *("-metadata", f"comment={PREVIEW_MARK}"),
+        ],
     )
     try:
         for sheet in sheets:

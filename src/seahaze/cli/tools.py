@@ -49,7 +49,7 @@ def cmd_classes(args: argparse.Namespace) -> int:
 def cmd_preview(args: argparse.Namespace) -> int:
     """Write a contact sheet of one scene: clean and levels side by side, boxes drawn; with
     ``--sequence``, an animated GIF or MP4 of a sequence's frames."""
-    from ..preview import PreviewError, contact_sheet
+    from ..preview import PreviewError, check_overwrite, contact_sheet, save_sheet
 
     root = Path(args.dataset)
     levels = [lv.strip() for lv in args.levels.split(",")] if args.levels else None
@@ -65,9 +65,12 @@ def cmd_preview(args: argparse.Namespace) -> int:
         raise UsageError(str(err)) from None
     out = Path(args.out) if args.out else root / "preview.png"
     try:
+        check_overwrite(out)
         out.parent.mkdir(parents=True, exist_ok=True)
-        sheet.save(out)
-    except (OSError, ValueError) as err:  # ValueError: an unknown image suffix
+        save_sheet(sheet, out)
+    except PreviewError as err:
+        raise UsageError(str(err)) from None
+    except (OSError, ValueError) as err:
         raise UsageError(f"--out {out}: cannot write the contact sheet ({err})") from None
     print(f"wrote {out}")
     return 0
@@ -76,7 +79,14 @@ def cmd_preview(args: argparse.Namespace) -> int:
 def _preview_sequence(args: argparse.Namespace, root: Path, levels: list[str] | None) -> int:
     """``seahaze preview --sequence NAME``: every frame's contact sheet as an animated GIF or
     an MP4, by the extension of ``--out``."""
-    from ..preview import ANIMATION_FORMATS, PreviewError, animation, save_gif, save_mp4
+    from ..preview import (
+        ANIMATION_FORMATS,
+        PreviewError,
+        animation,
+        check_overwrite,
+        save_gif,
+        save_mp4,
+    )
 
     out = Path(args.out) if args.out else root / f"{args.sequence}.gif"
     suffix = out.suffix.lower()
@@ -84,6 +94,7 @@ def _preview_sequence(args: argparse.Namespace, root: Path, levels: list[str] | 
         allowed = " or ".join(ANIMATION_FORMATS)
         raise UsageError(f"--out {out}: an animated preview is a {allowed} file")
     try:
+        check_overwrite(out)
         sheets, fps = animation(
             root, args.sequence, levels, args.columns, args.tile_width, not args.no_boxes
         )
@@ -142,7 +153,10 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     preview.add_argument("--no-boxes", action="store_true", help="do not draw the label boxes")
     preview.add_argument(
-        "--out", metavar="FILE", help="output file (default: DIR/preview.png, DIR/NAME.gif)"
+        "--out",
+        metavar="FILE",
+        help="output file (default: DIR/preview.png, DIR/NAME.gif); an existing file is "
+        "replaced only when it is a preview seahaze wrote, else choose another name",
     )
     preview.set_defaults(func=cmd_preview)
 
