@@ -18,11 +18,11 @@ from ..dataset.layout import Layout
 from ..dataset.writer import write_scene
 from ..render.engine import render_scene
 from ..spec import SceneSpec
-from .errors import BatchRefusedError
-from .plan import SceneJob
 
-DASK_CONNECT_TIMEOUT_S = 15
-"""How long to try reaching a Dask scheduler before giving up."""
+# Reaching a scheduler lives in its own module; the names stay importable from here.
+from .dask_connect import DASK_CONNECT_TIMEOUT_S as DASK_CONNECT_TIMEOUT_S
+from .dask_connect import connect_dask as connect_dask
+from .plan import SceneJob
 
 
 @dataclass
@@ -190,26 +190,6 @@ class _LocalPool:
 
     def close(self) -> None:
         self.executor.shutdown(wait=True, cancel_futures=True)
-
-
-def connect_dask(scheduler: str) -> Any:
-    """A ``distributed.Client`` of the scheduler at ``scheduler``.
-
-    Raises :class:`BatchRefusedError` when dask.distributed is missing or the scheduler cannot
-    be reached in :data:`DASK_CONNECT_TIMEOUT_S`.
-    """
-    try:
-        from distributed import Client
-    except ImportError:
-        raise BatchRefusedError(
-            "--executor dask needs dask.distributed: pip install 'dask[distributed]'"
-        ) from None
-    try:
-        return Client(scheduler, timeout=f"{DASK_CONNECT_TIMEOUT_S}s", set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as err:
-        raise BatchRefusedError(
-            f"cannot reach the Dask scheduler at {scheduler!r}: {err}"
-        ) from None
 
 
 class _DaskCluster:

@@ -47,6 +47,7 @@ from ..metric.errors import MetricInputError
 from ..metric.ground_truth import write_coco
 from ..vessels import CLASS_NAMES
 from ..visibility import CLEAN_LEVEL, is_level_name, level_name
+from .dask_connect import DASK_WAIT_S
 from .errors import ConfigChangedError, DamagedManifestError, ForeignFolderError
 from .executors import SceneDone, connect_dask, start_executor
 from .folder import (
@@ -91,6 +92,8 @@ class BatchOptions:
     workers: int = 1
     executor: Literal["local", "dask"] = "local"
     scheduler: str | None = None
+    dask_wait: float = DASK_WAIT_S
+    """Seconds to wait for a first worker of a Dask scheduler that has none."""
     force: bool = False
 
 
@@ -113,7 +116,9 @@ def run_batch(
     root = Path(root).resolve()
     inspect_folder(root)  # a folder seahaze did not make is refused before the lock is made
     # Reach the cluster before touching the folder: a refusal leaves everything as it was.
-    client = connect_dask(options.scheduler or "") if options.executor == "dask" else None
+    client = None
+    if options.executor == "dask":
+        client = connect_dask(options.scheduler or "", wait_s=options.dask_wait, note=reporter.warn)
     try:
         root.mkdir(parents=True, exist_ok=True)
         with DatasetLock(root, reporter.warn):

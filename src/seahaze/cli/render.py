@@ -63,8 +63,14 @@ def _check_batch_args(args: argparse.Namespace) -> None:
             raise UsageError(
                 "--workers is for --executor local; a Dask cluster's size is its workers"
             )
+        if args.dask_wait is not None and not 0.0 < args.dask_wait <= 86400.0:
+            raise UsageError(
+                f"--dask-wait {args.dask_wait:g}: must be within 0 (excluded)..86400 s"
+            )
     elif args.scheduler:
         raise UsageError("--scheduler needs --executor dask")
+    elif args.dask_wait is not None:
+        raise UsageError("--dask-wait needs --executor dask")
 
 
 def _check_out(out: Path) -> Any:
@@ -244,6 +250,7 @@ def cmd_render(args: argparse.Namespace) -> int:
         workers=args.workers or 1,
         executor=args.executor,
         scheduler=args.scheduler,
+        **({"dask_wait": args.dask_wait} if args.dask_wait is not None else {}),
         force=args.force,
     )
     try:
@@ -381,6 +388,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--scheduler",
         metavar="ADDRESS",
         help="address of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (--executor dask)",
+    )
+    parser.add_argument(
+        "--dask-wait",
+        type=float,
+        metavar="S",
+        help="when the Dask scheduler has no workers, wait S seconds (0 < S <= 86400) for one "
+        "to join, then give up with exit 2 (default 60; reaching the scheduler itself has a "
+        "15 s deadline; --executor dask)",
     )
     parser.add_argument(
         "--force",
