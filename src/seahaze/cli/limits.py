@@ -7,18 +7,28 @@ A job estimated at :data:`CONFIRM_SECONDS` or more, or needing more than
 :data:`CONFIRM_MEMORY_FRACTION` of the machine's memory for one scene, starts only with
 ``--yes``; the message gives the estimate.
 
-The estimate is the cost model of ``scripts/measure_cost_model.py``, measured on the project's
-2-vCPU machine with the ``llvm_ad_rgb`` variant (docs/benchmarks.md, "Cost model")::
+The estimate is the cost model of ``scripts/measure_cost_model.py`` (render time) and
+``scripts/measure_estimates.py`` (memory, compilation, start-up), measured on the project's
+2-vCPU machine with the ``llvm_ad_rgb`` variant (docs/limits.md, "The estimate")::
 
     core-seconds per scene = setup(sea quality) + pixels · (images · write)
                              + pixels · spp · clean
                              + Σ_levels [ fixed(mode, V) + pixels · spp · per_sample(mode, V) ]
-    wall time = Σ_scenes serial + render / cores    (setup and writes are serial)
+    wall time = start-up + compilation + Σ_scenes serial + render / cores
 
 except in ``physical``, whose one pass gives the clean image and every level: its render part is
 ``pixels · spp · (pass + (levels − 1) · level) + photons / 2^17 · Σ_levels table(V)``, the tables
 timed at 2^17 photons and traced with ``EstimatorSettings.photons_for(pixels · spp)``
 (:mod:`seahaze.render.estimator`).
+
+Compilation: drjit compiles a render's kernels on first use and keeps them in its cache
+(``~/.drjit``); kernels bake in the image size and sample count. The estimate counts a full
+compilation for a kind of render (variant, mode, level count) this machine has not rendered,
+a partial one for a known kind at a new size or sample count, and none for a render it has
+made before: :class:`KernelRecord` remembers them in seahaze's state folder.
+
+Memory: ``base(mode) + pixels · (per_pixel(mode) + images · per_image(mode))`` for one scene;
+scenes rendered at once (``--workers``) add up.
 
 ``V``-dependent constants are interpolated in log V between 50, 300 and 4000 m (held beyond).
 On a GPU (``cuda_ad_rgb``) the estimate is an upper bound.
@@ -26,13 +36,17 @@ On a GPU (``cuda_ad_rgb``) the estimate is an upper bound.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
+import json
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
-from ..fileio import cores
+from .. import __version__
+from ..fileio import cores, write_json
 from ..spec import SceneSpec
 
 MAX_SCENES = 10_000
@@ -48,18 +62,20 @@ CONFIRM_SECONDS = 3600.0
 """A job estimated at this many seconds or more needs ``--yes``."""
 ANNOUNCE_SECONDS = 300.0
 """A job estimated at this many seconds or more prints its estimate before it starts."""
+ANNOUNCE_COMPILE_SECONDS = 10.0
+"""A job that will compile kernels for this many seconds or more says so before it starts."""
 CONFIRM_MEMORY_FRACTION = 0.8
 """A scene estimated to need more than this share of the machine's memory needs ``--yes``."""
 
 # measured by scripts/measure_cost_model.py (docs/benchmarks.md, "Cost model"); CPU seconds
-SETUP_CORE_S = {"low": 1.07, "medium": 1.21, "high": 2.44}
-CLEAN_CORE_S = 4.21e-07
-WRITE_CORE_S = 4.54e-07
-PHYSICAL_PASS_CORE_S = 6.88e-07
-PHYSICAL_LEVEL_CORE_S = 1.11e-08
-PHYSICAL_TABLE_S = {50.0: 0.28, 300.0: 0.14, 4000.0: 0.07}
-REFERENCE_CORE_S = {50.0: 6.18e-06, 300.0: 4.21e-06, 4000.0: 2.03e-06}
-ASM_LEVEL_S = {50.0: 0.81, 300.0: 0.64, 4000.0: 0.51}
+SETUP_CORE_S = {"low": 1.79, "medium": 1.94, "high": 3.41}
+CLEAN_CORE_S = 6.56e-07
+WRITE_CORE_S = 5.97e-07
+PHYSICAL_PASS_CORE_S = 1.27e-06
+PHYSICAL_LEVEL_CORE_S = 0.0
+PHYSICAL_TABLE_S = {50.0: 0.57, 300.0: 0.26, 4000.0: 0.21}
+REFERENCE_CORE_S = {50.0: 9.69e-06, 300.0: 6.56e-06, 4000.0: 3.11e-06}
+ASM_LEVEL_S = {50.0: 1.31, 300.0: 0.91, 4000.0: 0.67}
 
 VALIDATED_FROM_M = {"physical": 100.0}
 """Thinnest visibility (m) down to which the mode is within 3 % of converged ``reference``
@@ -67,12 +83,24 @@ renders in every region (docs/physics.md, "Validated range"; docs/benchmarks.md)
 from 100 m (measured at 100, 200, 300, 1000 and 4000 m). ``reference`` is the unbiased yardstick
 at every level; ``asm`` is an approximation that is never within 3 % (5–17 % at 300–4000 m)."""
 
-BYTES_PER_PIXEL_IMAGE = 12
-"""Linear float32 RGB held per image until the scene is written."""
-BYTES_PER_PIXEL_SCENE = 64
-"""Geometry pass, film and exposure buffers per pixel, besides the images (rounded up)."""
-BASE_BYTES = 2 << 30
-"""Mitsuba, the sea mesh and its acceleration structure: about 1–2 GB."""
+# measured by scripts/measure_estimates.py (docs/limits.md, "The estimate"); bytes, wall seconds
+BASE_BYTES = {"physical": 6.34e08, "reference": 5.03e08, "asm": 4.68e08}
+"""Mitsuba, drjit, the sea mesh and its acceleration structure (resident bytes)."""
+BYTES_PER_PIXEL = {"physical": 159.0, "reference": 396.0, "asm": 415.0}
+"""Geometry pass, film and buffers per pixel, besides the images."""
+BYTES_PER_PIXEL_IMAGE = {"physical": 81.0, "reference": 11.0, "asm": 9.0}
+"""Per pixel and image (clean or level): its film channels, the linear image held until the
+scene is written, and its encoding."""
+STARTUP_S = 2.7
+"""Wall seconds before the first scene: Python, Mitsuba and the variant."""
+COMPILE_S = {"physical": 17.0, "reference": 3.7, "asm": 5.3}
+"""Wall seconds compiling a kind of render this machine has not rendered."""
+RECOMPILE_S = {"physical": 17.0, "reference": 3.7, "asm": 2.5}
+"""Wall seconds compiling a known kind of render at a new image size or sample count."""
+KERNEL_RECORD_NAME = "kernels.json"
+"""The file in seahaze's state folder that lists the renders this machine has compiled."""
+MAX_KERNEL_RECORDS = 4096
+"""Most renders the record keeps (the oldest are forgotten first)."""
 
 
 class LimitError(ValueError):
@@ -84,17 +112,36 @@ class Estimate:
     """What a job will cost on this machine."""
 
     seconds: float
-    """Wall-clock seconds for every scene still to render."""
+    """Wall-clock seconds for every scene still to render, compilation included."""
     scene_bytes: int
     """Peak memory of one scene (the largest)."""
     scenes: int
+    compile_seconds: float = 0.0
+    """Of :attr:`seconds`, those compiling kernels on first use."""
+    peak_bytes: int = 0
+    """Peak memory of the job: :attr:`scene_bytes` times the scenes rendered at once."""
 
     def describe(self) -> str:
+        compiling = (
+            f" (of which {format_duration(self.compile_seconds)} compiling kernels on first use)"
+            if self.compile_seconds >= 1.0
+            else ""
+        )
         return (
-            f"{self.scenes} scene(s), about {format_duration(self.seconds)} on "
-            f"{cores()} core(s) and {self.scene_bytes / 2**30:.1f} GiB per scene "
+            f"{self.scenes} scene(s), about {format_duration(self.seconds)}{compiling} on "
+            f"{cores()} core(s) and {max(self.peak_bytes, self.scene_bytes) / 2**30:.1f} GiB "
             "(cost model: docs/limits.md)"
         )
+
+    def record(self) -> dict[str, float | int]:
+        """The estimate as plain data (``seahaze render --estimate`` prints it as JSON)."""
+        return {
+            "scenes": self.scenes,
+            "seconds": round(self.seconds, 3),
+            "compile_seconds": round(self.compile_seconds, 3),
+            "scene_bytes": self.scene_bytes,
+            "peak_bytes": max(self.peak_bytes, self.scene_bytes),
+        }
 
 
 def max_workers() -> int:
@@ -163,10 +210,82 @@ def scene_core_seconds(spec: SceneSpec) -> tuple[float, float]:
 
 
 def scene_bytes(spec: SceneSpec) -> int:
-    """Peak memory of one scene: its images held until written, buffers and Mitsuba."""
+    """Peak resident memory of one scene: Mitsuba and the sea, the per-pixel buffers, and the
+    images (clean and levels) held until they are written."""
     width, height = spec.camera.resolution
+    mode = spec.render.mode
     images = len(spec.haze.levels) + 1
-    return BASE_BYTES + width * height * (images * BYTES_PER_PIXEL_IMAGE + BYTES_PER_PIXEL_SCENE)
+    per_pixel = BYTES_PER_PIXEL[mode] + images * BYTES_PER_PIXEL_IMAGE[mode]
+    return int(BASE_BYTES[mode] + width * height * per_pixel)
+
+
+def kernel_kind(spec: SceneSpec) -> str:
+    """What a render's kernels depend on besides its size and samples: seahaze's version (its
+    integrators), the variant, the mode and the number of levels."""
+    render = spec.render
+    return f"{__version__}/{render.variant}/{render.mode}/{len(spec.haze.levels)}"
+
+
+def kernel_key(spec: SceneSpec) -> str:
+    """:func:`kernel_kind` with the image size and samples per pixel, which kernels bake in."""
+    width, height = spec.camera.resolution
+    return f"{kernel_kind(spec)}/{width}x{height}/{spec.render.spp}"
+
+
+class KernelRecord:
+    """The renders this machine has compiled kernels for, kept in seahaze's state folder
+    (``$SEAHAZE_STATE_DIR/kernels.json``): a hint for the estimate, never a reason to refuse.
+    drjit's own cache may be emptied behind its back; then a render compiles again and takes
+    longer than estimated."""
+
+    def __init__(self, keys: Iterable[str] = ()):
+        self.keys = list(dict.fromkeys(keys))
+
+    @staticmethod
+    def path() -> Path:
+        from ..dataset.owned import state_dir
+
+        return state_dir() / KERNEL_RECORD_NAME
+
+    @classmethod
+    def load(cls) -> KernelRecord:
+        """The record on this machine; empty when missing or unreadable (it is only a hint)."""
+        try:
+            path = cls.path()
+            if path.stat().st_size > 1 << 20:
+                return cls()
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError, RecursionError):
+            return cls()
+        keys = data.get("kernels") if isinstance(data, dict) else None
+        if not isinstance(keys, list):
+            return cls()
+        return cls(k for k in keys if isinstance(k, str) and len(k) < 512)
+
+    def compile_seconds(self, specs: Iterable[SceneSpec]) -> float:
+        """Wall seconds the renders of ``specs`` will spend compiling: each kind not compiled
+        before costs :data:`COMPILE_S`, each new size or sample count of a known kind
+        :data:`RECOMPILE_S`, a render made before nothing."""
+        known = set(self.keys)
+        kinds = {key.rsplit("/", 2)[0] for key in known}
+        seconds = 0.0
+        for spec in specs:
+            key, kind, mode = kernel_key(spec), kernel_kind(spec), spec.render.mode
+            if key in known:
+                continue
+            seconds += RECOMPILE_S[mode] if kind in kinds else COMPILE_S[mode]
+            known.add(key)
+            kinds.add(kind)
+        return seconds
+
+    def remember(self, specs: Iterable[SceneSpec]) -> None:
+        """Add the renders of ``specs`` and write the record (silently skipped when the state
+        folder cannot be written: the record only makes estimates better)."""
+        added = [kernel_key(spec) for spec in specs]
+        self.keys = [k for k in self.keys if k not in added] + list(dict.fromkeys(added))
+        self.keys = self.keys[-MAX_KERNEL_RECORDS:]
+        with contextlib.suppress(OSError):
+            write_json(self.path(), {"format": "seahaze-kernels/1", "kernels": self.keys})
 
 
 def check_hard_limits(
@@ -201,25 +320,38 @@ def frames_of(spec: SceneSpec) -> int:
     return spec.sequence.frames if spec.sequence is not None else 1
 
 
-def estimate(jobs: Sequence[tuple[SceneSpec, int]]) -> Estimate:
-    """The time and memory estimate of rendering ``count`` scenes (or frames) like each spec:
-    a frame costs what a still scene does."""
+def estimate(
+    jobs: Sequence[tuple[SceneSpec, int]],
+    kernels: KernelRecord | None = None,
+    at_once: int = 1,
+) -> Estimate:
+    """The time and memory estimate of rendering ``count`` scenes (or frames) like each spec
+    (a frame costs what a still scene does), ``at_once`` of them at a time (``--workers``),
+    with the compilation ``kernels`` says is still to do (None: the record on this machine)."""
+    kernels = KernelRecord.load() if kernels is None else kernels
     serial = parallel = 0.0
     for spec, count in jobs:
         s, p = scene_core_seconds(spec)
         serial, parallel = serial + count * s, parallel + count * p
-    seconds = serial + parallel / max(cores(), 1)
+    scenes = sum(count for _, count in jobs)
+    compiling = kernels.compile_seconds(spec for spec, count in jobs if count) if scenes else 0.0
+    seconds = (STARTUP_S + compiling if scenes else 0.0) + serial + parallel / max(cores(), 1)
     peak = max((scene_bytes(spec) for spec, _ in jobs), default=0)
-    return Estimate(seconds, peak, sum(count for _, count in jobs))
+    together = peak * max(min(at_once, scenes), 1)
+    return Estimate(seconds, peak, scenes, compiling, together)
 
 
-def confirmation_needed(job: Estimate) -> str | None:
-    """Why the job needs ``--yes`` (None: it does not)."""
-    memory = total_memory()
-    if memory and job.scene_bytes > CONFIRM_MEMORY_FRACTION * memory:
+def confirmation_needed(job: Estimate, memory: int | None = None) -> str | None:
+    """Why the job needs ``--yes`` (None: it does not) on a machine of ``memory`` bytes
+    (None: this one)."""
+    memory = total_memory() if memory is None else memory
+    needed = max(job.peak_bytes, job.scene_bytes)
+    if memory and needed > CONFIRM_MEMORY_FRACTION * memory:
+        one = needed == job.scene_bytes
+        what, verb = ("one scene", "needs") if one else ("the scenes rendered at once", "need")
         return (
-            f"one scene needs about {job.scene_bytes / 2**30:.0f} GiB of memory and this "
-            f"machine has {memory / 2**30:.0f} GiB"
+            f"{what} {verb} about {needed / 2**30:.1f} GiB of memory and this machine has "
+            f"{memory / 2**30:.1f} GiB"
         )
     if job.seconds >= CONFIRM_SECONDS:
         return f"the job takes about {format_duration(job.seconds)}"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -122,29 +123,46 @@ def _warn_below_validated_range(plan: Any) -> None:
             )
 
 
-def _confirm(
+def _estimate(
     scenes: list[tuple[Any, str]], args: argparse.Namespace, folder: Any, make_plan: Any
-) -> Any:
-    """Print the estimate of a long job; refuse one of an hour or more without --yes.
+) -> tuple[Any, limits.Estimate, str | None]:
+    """The job's estimate and why it needs ``--yes`` (None: it does not), and the plan when
+    it had to be made.
 
     The estimate of all ``--scenes`` of every template comes first (variation does not change
     a scene's cost), so a huge job is refused before it is planned; only a resumed folder's
-    job is planned to leave out the scenes already done. Returns the plan when made."""
+    job is planned to leave out the scenes already done."""
     plan, count = None, args.count or 1
-    job = limits.estimate([(spec, count * limits.frames_of(spec)) for spec, _ in scenes])
+    at_once = (args.workers or 1) if args.executor == "local" else 1
+    jobs = [(spec, count * limits.frames_of(spec)) for spec, _ in scenes]
+    job = limits.estimate(jobs, at_once=at_once)
     reason = limits.confirmation_needed(job)
-    if reason and not args.yes and (folder.manifest or {}).get("scenes"):
+    resumed = bool((folder.manifest or {}).get("scenes"))
+    if resumed and (args.estimate or (reason and not args.yes)):
         plan = make_plan()
-        job = limits.estimate([(spec, 1) for spec in _todo(plan, folder)])
+        job = limits.estimate([(spec, 1) for spec in _todo(plan, folder)], at_once=at_once)
         reason = limits.confirmation_needed(job)
+    return plan, job, reason
+
+
+def _confirm(job: limits.Estimate, reason: str | None, args: argparse.Namespace) -> None:
+    """Print the estimate of a long job; refuse one of an hour or more, or one that needs
+    more memory than the machine has, without --yes."""
     if reason and not args.yes:
         raise UsageError(
             f"{reason}: {job.describe()}. Pass --yes to start it, or lower --res, --spp, "
-            "--scenes or the levels"
+            "--scenes, --workers or the levels"
         )
     if job.scenes and (reason or job.seconds >= limits.ANNOUNCE_SECONDS) and not args.quiet:
         print(f"seahaze: estimated {job.describe()}", file=sys.stderr)
-    return plan
+    elif job.compile_seconds >= limits.ANNOUNCE_COMPILE_SECONDS and not args.quiet:
+        # A first render of a new size or sample count spends most of its time compiling.
+        print(
+            f"seahaze: compiling kernels for a new render first (about "
+            f"{limits.format_duration(job.compile_seconds)}, once per size and sample count); "
+            f"estimated {job.describe()}",
+            file=sys.stderr,
+        )
 
 
 def _todo(plan: Any, folder: Any) -> list[Any]:
@@ -231,7 +249,12 @@ def cmd_render(args: argparse.Namespace) -> int:
         except DatasetError as err:
             raise UsageError(str(err)) from None
 
-    plan = _confirm(scenes, args, folder, make_plan) or make_plan()
+    plan, job, reason = _estimate(scenes, args, folder, make_plan)
+    if args.estimate:
+        print(json.dumps({**job.record(), "needs_yes": reason}))
+        return 0
+    _confirm(job, reason, args)
+    plan = plan or make_plan()
     _check_layouts(plan)
     _warn_below_validated_range(plan)
     if args.executor == "local":
@@ -264,6 +287,9 @@ def cmd_render(args: argparse.Namespace) -> int:
         return 3
     finally:
         reporter.close()
+    if report.rendered and args.executor == "local":
+        # This machine compiled these renders' kernels: the next estimate counts no compiling.
+        limits.KernelRecord.load().remember(spec for spec, _ in scenes)
     if report.outcome == "complete" and report.rendered == 0:
         print(
             f"nothing to render: all {report.planned} scene(s) in {out.resolve()} are done "
@@ -419,5 +445,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="start a job estimated at an hour or more (or close to the machine's memory); "
         "without it such a job stops with its estimate (docs/limits.md)",
+    )
+    parser.add_argument(
+        "--estimate",
+        action="store_true",
+        help="print the job's estimate as one JSON line (scenes, seconds, compile_seconds, "
+        "scene_bytes, peak_bytes, needs_yes) and exit without rendering or touching --out",
     )
     parser.set_defaults(func=cmd_render)
