@@ -16,6 +16,7 @@ from typing import Any
 
 from ..dataset.layout import Layout
 from ..dataset.writer import write_scene
+from ..interrupts import run_interruptibly
 from ..render.engine import render_scene
 from ..spec import SceneSpec
 
@@ -77,7 +78,9 @@ class _InProcess:
             signalled.clear()
             start = time.perf_counter()
             try:
-                scene = render_scene(job.spec, job.name, self.note, job.frame)
+                scene = run_interruptibly(
+                    lambda: render_scene(job.spec, job.name, self.note, job.frame)
+                )
                 # Files are written only after the whole scene rendered, so a render cut short
                 # by an ignored SIGINT never reaches the folder.
                 if not signalled.is_set():

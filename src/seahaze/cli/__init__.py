@@ -8,6 +8,7 @@ locked folder, a changed config), 3 a write error stopped the batch (disk full, 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from .. import __version__
@@ -15,7 +16,7 @@ from ..metric import cli as metric_cli
 from . import export, render, tools, verify
 from .common import UsageError
 
-__all__ = ["UsageError", "build_parser", "main"]
+__all__ = ["UsageError", "build_parser", "entry", "main"]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -47,3 +48,20 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("seahaze: interrupted", file=sys.stderr)
         return 130
+
+
+def entry() -> None:
+    """The ``seahaze`` console command: :func:`main`, then exit with its code.
+
+    After an interrupt that left a render running in its thread (drjit cannot stop a kernel;
+    :func:`seahaze.interrupts.run_interruptibly`), the process exits at once instead of
+    waiting at interpreter shutdown for that render to end: the batch has already released
+    its lock and recorded the scene as pending, and the render writes nothing.
+    """
+    code = main()
+    interrupts = sys.modules.get("seahaze.interrupts")  # imported only by a render
+    if interrupts is not None and interrupts.render_abandoned():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)

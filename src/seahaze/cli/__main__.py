@@ -1,7 +1,5 @@
 """``python -m seahaze.cli``: the ``seahaze`` command."""
 
-import sys
+from . import entry
 
-from . import main
-
-sys.exit(main())
+entry()

@@ -19,6 +19,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
     Exit code 0 when every level is within the tolerance, 1 when one is not, 2 on bad input.
     """
     from .. import verify
+    from ..interrupts import run_interruptibly
     from ..render.variant import VariantError
     from ..spec import SceneSpec
 
@@ -68,7 +69,9 @@ def cmd_verify(args: argparse.Namespace) -> int:
             target_width_deg=args.target_width,
             denoise=args.denoise == "on",
         )
-        report = verify.run_verify(base, levels, settings, progress=say, keep=measurements)
+        report = run_interruptibly(
+            lambda: verify.run_verify(base, levels, settings, progress=say, keep=measurements)
+        )
     except (verify.VerifyInputError, VariantError, ValueError) as err:
         raise UsageError(str(err)) from None
     print(verify.format_report(report))
