@@ -250,6 +250,24 @@ def test_progress_shows_scenes_images_per_second_and_eta(template, tty):
     assert quiet.getvalue() == ""
 
 
+def test_a_scene_that_renders_for_long_gives_heartbeats(template, tmp_path):
+    """Without a terminal, a line and a ``heartbeat`` log event come every ``heartbeat_s``
+    while a scene renders (a batch log never sits silent for minutes); the render runs in its
+    own thread, so the waiting main thread can say so."""
+    spec, name = load_scene(template)
+    plan = plan_scenes([(spec, name)], 1)
+    stream, log = _Stream(False), tmp_path / "log.jsonl"
+    reporter = Reporter(stream=stream, log=log, heartbeat_s=0.5)
+    assert run_batch(plan, tmp_path / "out", reporter=reporter).outcome == "complete"
+    reporter.close()
+    events = [json.loads(line) for line in log.open()]
+    beats = [e for e in events if e["event"] == "heartbeat"]
+    assert beats and all(e["done"] == 0 and e["planned"] == 1 for e in beats)
+    assert [e["seconds"] for e in beats] == sorted(e["seconds"] for e in beats)
+    assert "0/1 scenes" in stream.getvalue() and "elapsed, rendering" in stream.getvalue()
+    assert events[0]["event"] == "start" and events[-1]["event"] == "end"
+
+
 # --------------------------------------------------------------------------------------------
 # The reference batch, resume, lock, config changes, write errors
 

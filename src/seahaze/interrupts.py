@@ -24,9 +24,9 @@ WAIT_STEP_S = 0.1
 """How often the main thread wakes while a render runs: the longest a signal waits."""
 
 
-def run_interruptibly(render: Callable[[], T]) -> T:
+def run_interruptibly(render: Callable[[], T], tick: Callable[[], None] | None = None) -> T:
     """``render()`` in a thread of its own, while this thread waits in short steps; its
-    result, or its exception raised here.
+    result, or its exception raised here. ``tick`` is called at every step (progress).
 
     A signal's KeyboardInterrupt (or any exception) raised while waiting leaves the render
     running: it cannot be stopped. The caller must write nothing of it (write files only after
@@ -46,6 +46,8 @@ def run_interruptibly(render: Callable[[], T]) -> T:
     try:
         while thread.is_alive():
             thread.join(WAIT_STEP_S)
+            if tick is not None:
+                tick()
     except BaseException:
         _abandoned.set()
         raise

@@ -16,7 +16,7 @@ from typing import Any
 
 from ..dataset.layout import Layout
 from ..dataset.writer import write_scene
-from ..interrupts import run_interruptibly
+from ..interrupts import WAIT_STEP_S, run_interruptibly
 from ..render.engine import render_scene
 from ..spec import SceneSpec
 
@@ -58,8 +58,14 @@ Outcome = tuple[str, "SceneDone | BaseException"]
 class _InProcess:
     """Scenes rendered one after another in this process (``--workers 1``)."""
 
-    def __init__(self, jobs: Sequence[SceneJob], root: Path, note: Callable[[str], None]):
-        self.jobs, self.root, self.note = jobs, root, note
+    def __init__(
+        self,
+        jobs: Sequence[SceneJob],
+        root: Path,
+        note: Callable[[str], None],
+        tick: Callable[[], None] | None = None,
+    ):
+        self.jobs, self.root, self.note, self.tick = jobs, root, note, tick
         self._stop = False
 
     def results(self) -> Iterator[Outcome]:
@@ -79,7 +85,7 @@ class _InProcess:
             start = time.perf_counter()
             try:
                 scene = run_interruptibly(
-                    lambda: render_scene(job.spec, job.name, self.note, job.frame)
+                    lambda: render_scene(job.spec, job.name, self.note, job.frame), self.tick
                 )
                 # Files are written only after the whole scene rendered, so a render cut short
                 # by an ignored SIGINT never reaches the folder.
@@ -148,10 +154,17 @@ def _worker_init(parent_pid: int, threads: int) -> None:
 class _LocalPool:
     """Scenes rendered in ``workers`` spawned processes (Mitsuba and drjit are not fork-safe)."""
 
-    def __init__(self, jobs: Sequence[SceneJob], root: Path, workers: int):
+    def __init__(
+        self,
+        jobs: Sequence[SceneJob],
+        root: Path,
+        workers: int,
+        tick: Callable[[], None] | None = None,
+    ):
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
+        self.tick = tick
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
         self.executor = ProcessPoolExecutor(
             max_workers=workers,
@@ -171,13 +184,19 @@ class _LocalPool:
         }
 
     def results(self) -> Iterator[Outcome]:
-        from concurrent.futures import as_completed
+        from concurrent.futures import FIRST_COMPLETED, wait
 
-        for future in as_completed(self.futures):
-            if future.cancelled():
-                continue
-            error = future.exception()
-            yield self.futures[future], error if error is not None else future.result()
+        pending = set(self.futures)
+        while pending:
+            # Short waits: progress ticks between finished scenes, and a signal is seen at once.
+            finished, pending = wait(pending, timeout=WAIT_STEP_S, return_when=FIRST_COMPLETED)
+            if self.tick is not None:
+                self.tick()
+            for future in finished:
+                if future.cancelled():
+                    continue
+                error = future.exception()
+                yield self.futures[future], error if error is not None else future.result()
 
     def cancel(self) -> None:
         for future in self.futures:
@@ -247,11 +266,14 @@ def start_executor(
     workers: int,
     client: Any,
     note: Callable[[str], None],
+    tick: Callable[[], None] | None = None,
 ) -> Executor:
     """The executor for ``jobs``: the Dask cluster of ``client`` when given, else ``workers``
-    local processes (more than one), else this process (``note`` gets its per-pass messages)."""
+    local processes (more than one), else this process (``note`` gets its per-pass messages).
+    Local executors call ``tick`` every :data:`~seahaze.interrupts.WAIT_STEP_S` while they
+    wait (progress between scenes)."""
     if client is not None:
         return _DaskCluster(jobs, root, client)
     if workers > 1 and len(jobs) > 1:
-        return _LocalPool(jobs, root, min(workers, len(jobs)))
-    return _InProcess(jobs, root, note)
+        return _LocalPool(jobs, root, min(workers, len(jobs)), tick)
+    return _InProcess(jobs, root, note, tick)

@@ -12,6 +12,12 @@ from typing import IO, Any
 from .plan import SceneJob
 from .report import BatchReport
 
+HEARTBEAT_S = 60.0
+"""Without a terminal, a progress line (and a ``heartbeat`` log event) at least this often
+while scenes render: a batch log never sits silent for minutes."""
+BAR_REFRESH_S = 1.0
+"""How often the bar on a terminal is redrawn while a scene renders (its clock moves)."""
+
 
 class Reporter:
     """Progress of a batch: a bar (or one line per scene when stderr is not a terminal), the
@@ -21,8 +27,9 @@ class Reporter:
     printed otherwise only when a single scene renders (many scenes get one line each).
     ``quiet`` silences the bar and messages but not warnings; ``notes`` receives every message
     instead of the console. Log lines carry ``time`` (Unix seconds) and ``event``: ``start``,
-    ``scene_done`` (with per-pass seconds), ``scene_failed``, ``end``. The log is appended to,
-    so a resumed batch continues the same file.
+    ``scene_done`` (with per-pass seconds), ``scene_failed``, ``heartbeat`` (every
+    :data:`HEARTBEAT_S` without news: scenes done and seconds elapsed), ``end``. The log is
+    appended to, so a resumed batch continues the same file.
     """
 
     def __init__(
@@ -33,8 +40,10 @@ class Reporter:
         stream: IO[str] | None = None,
         bar: bool | None = None,
         notes: Callable[[str], None] | None = None,
+        heartbeat_s: float = HEARTBEAT_S,
     ):
         self.quiet = quiet
+        self.heartbeat_s = heartbeat_s
         self._notes = notes
         self.stream = stream or sys.stderr
         self.use_bar = (not quiet) and (self.stream.isatty() if bar is None else bar)
@@ -43,6 +52,7 @@ class Reporter:
         self._start = time.perf_counter()
         self._planned = self._done = self._images = self._failed = 0
         self._done_before = self._to_render = 0
+        self._last_news = self._last_refresh = time.perf_counter()
 
     def _event(self, event: str, **data: Any) -> None:
         if self._log is not None:
@@ -54,7 +64,29 @@ class Reporter:
                 self._log = None
                 self.warn(f"cannot write the --log file any more ({err}); continuing without")
 
+    def heartbeat(self) -> None:
+        """Called often while scenes render: redraw the bar (its clock) on a terminal; else,
+        after ``heartbeat_s`` (default :data:`HEARTBEAT_S`) without a line, say how far the
+        batch is (and log it)."""
+        now = time.perf_counter()
+        if self._bar is not None:
+            if now - self._last_refresh >= BAR_REFRESH_S:
+                self._last_refresh = now
+                self._bar.refresh()
+            return
+        if now - self._last_news < self.heartbeat_s:
+            return
+        self._last_news = now
+        elapsed = now - self._start
+        finished = self._done + self._failed
+        self._event("heartbeat", done=self._done, planned=self._planned, seconds=round(elapsed, 1))
+        if not self.quiet:
+            self._print(
+                f"[seahaze] {finished}/{self._planned} scenes, {_hms(elapsed)} elapsed, rendering"
+            )
+
     def _print(self, message: str) -> None:
+        self._last_news = time.perf_counter()
         if self._bar is not None:
             self._bar.write(message, file=self.stream)
         else:

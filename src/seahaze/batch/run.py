@@ -407,7 +407,12 @@ def render_pending(
     restore_sigterm = _sigterm_raises_interrupt()
     try:
         runner = start_executor(
-            pending, ledger.layout.root, options.workers, client, reporter.pass_note
+            pending,
+            ledger.layout.root,
+            options.workers,
+            client,
+            reporter.pass_note,
+            reporter.heartbeat,
         )
         for name, outcome in runner.results():
             stopping = stop is None
