@@ -12,7 +12,7 @@ from typing import IO, Any
 from .plan import SceneJob
 from .report import BatchReport
 
-HEARTBEAT_S = 60.0
+HEARTBEAT_S = 30.0
 """Without a terminal, a progress line (and a ``heartbeat`` log event) at least this often
 while scenes render: a batch log never sits silent for minutes."""
 BAR_REFRESH_S = 1.0
@@ -55,6 +55,7 @@ class Reporter:
         self._last_news = self._last_refresh = time.perf_counter()
 
     def _event(self, event: str, **data: Any) -> None:
+        self._last_news = time.perf_counter()
         if self._log is not None:
             record = {"time": round(time.time(), 3), "event": event, **data}
             try:
