@@ -863,8 +863,9 @@ class SequenceSpec(_Spec):
         100,
         ge=1,
         le=10000,
-        description="Number of frames (`--frames` overrides); each frame is a scene of the "
-        "batch, which holds at most 10,000.",
+        description="Number of frames, required in a scene file (a `sequence:` without it is "
+        "refused: each frame is a full render, so no count is assumed); `--frames` overrides "
+        "it. Each frame is a scene of the batch, which holds at most 10,000.",
     )
     fps: float = Field(
         10.0,
@@ -973,6 +974,14 @@ class SequenceSpec(_Spec):
         return frame / self.fps
 
 
+_SEQUENCE_NEEDS = (
+    "a sequence needs its number of frames, e.g. sequence: {frames: 50, fps: 10} (frames "
+    "1..10000; fps 0 (excluded)..120, default 10), or leave sequence: out for a still image; "
+    f"allowed fields: {', '.join(SequenceSpec.model_fields)}"
+)
+"""What an empty or frame-less ``sequence:`` is told."""
+
+
 class SceneSpec(_Spec):
     """A whole scene: camera, sun, sky, sea, vessels, haze and render settings."""
 
@@ -996,6 +1005,26 @@ class SceneSpec(_Spec):
     sequence: SequenceSpec | None = Field(
         None, description="Render the scene as a sequence of frames; default one still frame."
     )
+
+    @field_validator("sequence", mode="before")
+    @classmethod
+    def _sequence_not_empty(cls, value: Any) -> Any:
+        # A field validator sees None only when the file says `sequence:` with nothing under
+        # it (a left-out section is not validated): that rendered a still image, though the
+        # file asks for a sequence.
+        if value is None:
+            raise ValueError(f"an empty sequence block; {_SEQUENCE_NEEDS}")
+        return value
+
+    @field_validator("sequence")
+    @classmethod
+    def _sequence_has_frames(cls, value: SequenceSpec | None) -> SequenceSpec | None:
+        # `sequence: {}` once rendered 100 frames (minutes to hours) without a word: the frame
+        # count of a file's sequence is never assumed. Checked after SequenceSpec's own rules,
+        # so a field it refuses is reported first.
+        if value is not None and "frames" not in value.model_fields_set:
+            raise ValueError(f"frames is missing; {_SEQUENCE_NEEDS}")
+        return value
 
     @model_serializer(mode="wrap")
     def _omit_still(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
@@ -1086,8 +1115,17 @@ def with_overrides(
     fps: float | None = None,
     denoise: str | None = None,
 ) -> SceneSpec:
-    """A copy of ``spec`` with the command line's overrides (None: keep the scene's value);
-    ``frames`` or ``fps`` make a still scene a sequence."""
+    """A copy of ``spec`` with the command line's overrides (None: keep the scene's value).
+
+    ``frames`` makes a still scene a sequence (at ``fps``, default 10); ``fps`` alone changes a
+    sequence's frame rate and is refused for a still scene, which has no frames to time (it
+    once made it a 100-frame sequence).
+    """
+    if fps is not None and frames is None and spec.sequence is None:
+        raise OverrideError(
+            f"--fps {fps:g} needs a sequence: pass --frames N too, or add sequence: "
+            "{frames: N} to the scene (a still scene has one frame and no frame rate)"
+        )
     render = {"spp": spp, "seed": seed, "mode": mode, "variant": variant, "denoise": denoise}
     changes: dict[str, Any] = {"render": {k: v for k, v in render.items() if v is not None}}
     sequence = {"frames": frames, "fps": fps}

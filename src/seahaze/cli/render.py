@@ -378,7 +378,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--fps",
         type=float,
         metavar="F",
-        help="frame rate of the sequences (default: the scene's sequence.fps, else 10)",
+        help="frame rate of the sequences (default: the scene's sequence.fps, else 10); a "
+        "still scene (no 'sequence:') needs --frames N with it",
     )
     parser.add_argument(
         "--scenes",

@@ -58,7 +58,9 @@ def export_dataset(
     out = Path(out).resolve()
     if out == source.root or out.is_relative_to(source.root):
         raise ExportError(f"--out {out}: inside the dataset {source.root}; choose a folder outside")
+    _check_out_folder(out)
     plan = LAYOUTS[layout](source)
+    _check_outside_dataset(out, plan.targets(), source.root)
     placer = Placer(link)
     try:
         owned = OwnedFiles.open(out)
@@ -85,3 +87,31 @@ def export_dataset(
         len(stale) - len(kept),
         (*owned.ignored, *kept),
     )
+
+
+def _check_out_folder(out: Path) -> None:
+    """``out`` is a folder or can become one: a file there, or on the way to it, is bad input
+    (it was a write error, exit 3, after the plan was made)."""
+    for path in (out, *out.parents):
+        if path.exists():
+            if not path.is_dir():
+                what = "is a file" if path == out else f"lies under the file {path}"
+                raise ExportError(
+                    f"--out {out}: {what}, not a folder; give a new folder or one of an "
+                    "earlier export"
+                )
+            return
+
+
+def _check_outside_dataset(out: Path, targets: list[str], dataset: Path) -> None:
+    """No file of the export lands inside the dataset: an ``--out`` above the dataset (its
+    parent, with the dataset named like a split or level folder) or a folder of ``--out`` that
+    is a link into the dataset would place files among the dataset's own."""
+    folders = {str(Path(target).parent) for target in targets}
+    for folder in sorted(folders):
+        where = (out / folder).resolve()
+        if where == dataset or where.is_relative_to(dataset):
+            raise ExportError(
+                f"--out {out}: its {folder}/ would be inside the dataset {dataset} (the export "
+                "would write among the dataset's files); choose a folder outside the dataset"
+            )

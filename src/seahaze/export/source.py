@@ -4,13 +4,20 @@ made, with its levels, scenes and each scene's split."""
 from __future__ import annotations
 
 import json
+import math
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from ..dataset import FORMAT_VERSION, Layout
-from ..dataset.splits import scene_splits, split_order
-from ..visibility import CLEAN_LEVEL
+from ..dataset.splits import SPLIT_NAMES, scene_splits, split_order
+from ..visibility import CLEAN_LEVEL, is_level_name
+
+MAX_MANIFEST_BYTES = 1 << 30
+"""Largest ``dataset.json`` read (10,000 scenes of sequences' configs are about 60 MB)."""
+MAX_MANIFEST_DEPTH = 64
+"""Deepest nesting read: a manifest needs about 10 (scenes.<name>.config.vessels.placed[i]...)."""
 
 
 class ExportError(Exception):
@@ -62,11 +69,8 @@ def open_finished(root: Path, levels: list[str] | None = None) -> SourceDataset:
     if not root.is_dir():
         raise ExportError(f"{root}: not a folder; give a dataset folder written by seahaze render")
     layout = Layout(root)
-    data = _read_manifest(layout.manifest)
-    known = [
-        Level(lv["name"], float(lv["visibility_m"]), float(lv["sigma_per_m"]))
-        for lv in data["levels"]
-    ]
+    data = read_manifest(layout.manifest)
+    known = _levels(data, layout.manifest)
     chosen = _select(known, levels, layout.manifest)
     scenes = scene_splits(data)
     order = tuple(split_order(data))
@@ -74,32 +78,195 @@ def open_finished(root: Path, levels: list[str] | None = None) -> SourceDataset:
     stray = next(((name, split) for name, split in scenes.items() if split not in order), None)
     if stray is not None:
         raise ExportError(
-            f"{layout.manifest}: scene {stray[0]!r} has split {stray[1]!r}; allowed: "
+            f"{layout.manifest}: scene {stray[0]!r} has split {_short(stray[1])}; allowed: "
             f"{', '.join(order)} (it would be left out of the export)"
         )
     _check_finished(layout, data, [CLEAN_LEVEL, *(lv.name for lv in chosen)])
     return SourceDataset(layout, tuple(chosen), scenes, order, tuple(data["classes"]))
 
 
-def _read_manifest(path: Path) -> dict[str, Any]:
-    if not path.is_file():
-        raise ExportError(
-            f"{path}: missing; not a seahaze dataset (one is written by 'seahaze render')"
-        )
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as err:
-        raise ExportError(f"{path}: cannot read the manifest ({type(err).__name__})") from None
+def read_manifest(path: Path) -> dict[str, Any]:
+    """The seahaze manifest (``dataset.json``) at ``path``, every part an export or a split
+    reads checked for its type: config (and its split), levels, classes, and each scene's name,
+    status and split. It is data from disk, so a hand edit or another program's file is an
+    :class:`ExportError` (one line naming the file and the field), never a traceback; a file
+    past 1 GiB or nested deeper than :data:`MAX_MANIFEST_DEPTH` is not parsed further."""
+    data = _load_json(path)
     if not (isinstance(data, dict) and data.get("format") == "seahaze-dataset"):
         raise ExportError(f"{path}: not a seahaze dataset manifest (format: seahaze-dataset)")
-    if data.get("format_version") != FORMAT_VERSION:
+    version = data.get("format_version")
+    if isinstance(version, bool) or version != FORMAT_VERSION:  # true == 1 in Python
         raise ExportError(
-            f"{path}: format_version {data.get('format_version')!r}; this seahaze reads "
-            f"{FORMAT_VERSION}"
+            f"{path}: format_version {_short(version)}; this seahaze reads {FORMAT_VERSION}"
         )
     if not isinstance(data.get("scenes"), dict) or not data["scenes"]:
-        raise ExportError(f"{path}: the manifest lists no scenes")
+        raise ExportError(f"{path}: the manifest lists no scenes (scenes: a mapping of names)")
+    problem = _shape_problem(data)
+    if problem is not None:
+        raise ExportError(
+            f"{path}: {problem}; the manifest is damaged: rerun the 'seahaze render' command "
+            "that made the dataset"
+        )
     return data
+
+
+def _load_json(path: Path) -> Any:
+    """The JSON document of the regular file ``path``, within the size and nesting limits."""
+    try:
+        info = path.stat()
+    except FileNotFoundError:
+        info = None
+    except OSError as err:
+        raise ExportError(f"{path}: cannot read the manifest ({err.strerror or err})") from None
+    if info is None or not stat.S_ISREG(info.st_mode):
+        what = "missing" if info is None else "not a regular file"
+        raise ExportError(
+            f"{path}: {what}; not a seahaze dataset (one is written by 'seahaze render')"
+        )
+    if info.st_size > MAX_MANIFEST_BYTES:
+        raise ExportError(f"{path}: {info.st_size:,} bytes; a manifest is at most 1 GiB")
+    try:
+        data = json.loads(path.read_bytes())
+    except RecursionError:
+        raise ExportError(
+            f"{path}: nested deeper than {MAX_MANIFEST_DEPTH}; not a seahaze manifest"
+        ) from None
+    except (OSError, UnicodeDecodeError, ValueError) as err:
+        # ValueError: invalid JSON, or an integer of more than 4300 digits.
+        reason = str(err).splitlines()[0] if str(err) else type(err).__name__
+        raise ExportError(f"{path}: cannot read the manifest (not valid JSON: {reason})") from None
+    if _depth(data) > MAX_MANIFEST_DEPTH:
+        raise ExportError(
+            f"{path}: nested deeper than {MAX_MANIFEST_DEPTH}; not a seahaze manifest"
+        )
+    return data
+
+
+def _depth(data: Any) -> int:
+    """Nesting depth of a JSON document, without recursion (stops past the limit)."""
+    deepest, stack = 0, [(data, 1)]
+    while stack and deepest <= MAX_MANIFEST_DEPTH:
+        item, depth = stack.pop()
+        deepest = max(deepest, depth)
+        if isinstance(item, dict):
+            stack += [(v, depth + 1) for v in item.values()]
+        elif isinstance(item, list):
+            stack += [(v, depth + 1) for v in item]
+    return deepest
+
+
+def _shape_problem(data: dict[str, Any]) -> str | None:
+    """What in the parts an export reads does not have its type (None: all do)."""
+    config = data.get("config")
+    if not isinstance(config, dict):
+        return f"config is {_kind(config)}; allowed: a mapping"
+    split = config.get("split")
+    if split is not None and not isinstance(split, dict):
+        return f"config.split is {_kind(split)}; allowed: a mapping of {', '.join(SPLIT_NAMES)}"
+    levels = data.get("levels")
+    if not isinstance(levels, list) or not levels:
+        what = "empty" if isinstance(levels, list) else _kind(levels)
+        return f"levels is {what}; allowed: a list of at least one hazy level"
+    classes = data.get("classes")
+    if not isinstance(classes, list) or not all(isinstance(c, str) and c for c in classes):
+        return "classes is not a list of class names"
+    for name, entry in data["scenes"].items():
+        if not _is_plain_name(name):
+            return (
+                f"scene name {_short(name)} is not a file name (no '/', '..' or control character)"
+            )
+        if not isinstance(entry, dict):
+            return f"scenes.{name} is {_kind(entry)}; allowed: a mapping with status and split"
+        if not isinstance(entry.get("status"), str):
+            return f"scenes.{name}.status is {_kind(entry.get('status'))}; allowed: done"
+        if not isinstance(entry.get("split", ""), str | None):
+            return (
+                f"scenes.{name}.split is {_kind(entry['split'])}; allowed: {', '.join(SPLIT_NAMES)}"
+            )
+    return None
+
+
+def _levels(data: dict[str, Any], path: Path) -> list[Level]:
+    """The manifest's hazy levels, each with a folder name, a visibility and an extinction."""
+    known: list[Level] = []
+    for i, entry in enumerate(data["levels"]):
+        where = f"{path}: levels[{i}]"
+        if not isinstance(entry, dict):
+            raise ExportError(
+                f"{where} is {_kind(entry)}; allowed: a mapping with name, "
+                "visibility_m and sigma_per_m"
+            )
+        name = entry.get("name")
+        # Length first: is_level_name reads the digits as an int (a 5000-digit one raises).
+        if (
+            not (isinstance(name, str) and len(name) <= 12 and is_level_name(name))
+            or name == CLEAN_LEVEL
+        ):
+            raise ExportError(
+                f"{where}.name is {_short(name)}; allowed: a level folder name such as v0300"
+            )
+        if any(level.name == name for level in known):
+            raise ExportError(f"{where}.name {name} is listed twice; allowed: one entry per level")
+        values = []
+        for key, low in (("visibility_m", "> 0 m"), ("sigma_per_m", "> 0 per m")):
+            value = entry.get(key)
+            if key not in entry:
+                raise ExportError(f"{where}.{key} is missing; allowed: a finite number {low}")
+            if not (isinstance(value, int | float) and not isinstance(value, bool)):
+                raise ExportError(
+                    f"{where}.{key} is {_short(value)}; allowed: a finite number {low}"
+                )
+            number = _finite(value)
+            if number is None or number <= 0:
+                raise ExportError(
+                    f"{where}.{key} is {_short(value)}; allowed: a finite number {low}"
+                )
+            values.append(number)
+        known.append(Level(name, values[0], values[1]))
+    return known
+
+
+def _finite(value: int | float) -> float | None:
+    """``value`` as a finite float (None for NaN, an infinity or an integer beyond float)."""
+    try:
+        number = float(value)
+    except OverflowError:
+        return None
+    return number if math.isfinite(number) else None
+
+
+def _is_plain_name(name: Any) -> bool:
+    """A scene name that is one file-name component (no folder, no parent, no control
+    character)."""
+    return (
+        isinstance(name, str)
+        and 0 < len(name) <= 255
+        and name not in (".", "..")
+        and name.isprintable()  # no NUL, newline or other control character
+        and not any(c in name for c in "/\\")
+    )
+
+
+def _kind(value: Any) -> str:
+    """``value``'s JSON kind in words, for messages."""
+    kinds = {dict: "a mapping", list: "a list", str: "a string", bool: "true/false"}
+    if value is None:
+        return "missing (or null)"
+    return next((text for kind, text in kinds.items() if isinstance(value, kind)), "a number")
+
+
+def _short(value: Any) -> str:
+    """``value`` for a one-line message: a string or number as written, anything else by its
+    kind (a repr of a huge or deep value would be a page long, or recurse)."""
+    if isinstance(value, str):
+        return repr(value[:40] + ("…" if len(value) > 40 else ""))
+    if isinstance(value, bool) or value is None:
+        return _kind(value)
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, int):
+        return str(value) if abs(value) < 10**40 else "an integer of more than 40 digits"
+    return _kind(value)
 
 
 def _select(known: list[Level], wanted: list[str] | None, manifest: Path) -> list[Level]:
@@ -120,7 +287,7 @@ def _check_finished(layout: Layout, data: dict[str, Any], levels: list[str]) -> 
     scenes = data["scenes"]
     unfinished = [name for name, entry in scenes.items() if entry.get("status") != "done"]
     if unfinished:
-        status = scenes[unfinished[0]].get("status")
+        status = scenes[unfinished[0]]["status"][:40]  # a string: read_manifest checked it
         raise ExportError(
             f"{layout.root}: not a finished dataset: {len(unfinished)} of {len(scenes)} scenes "
             f"are not done (e.g. {unfinished[0]}: {status}); rerun its 'seahaze render' command"

@@ -127,7 +127,14 @@ def load_detector(
     try:
         model = YOLO(str(weights), task="detect")
     except Exception as exc:  # Ultralytics raises many types for an unusable file
-        raise located(weights, f"cannot load the model ({exc.__class__.__name__}: {exc})") from None
+        # Their messages run to several lines (a pickle's, PyTorch's advice): the first says it.
+        first = next((line.strip() for line in str(exc).splitlines() if line.strip()), "")
+        first = first if len(first) <= 200 else first[:200] + "…"
+        raise located(
+            weights,
+            f"cannot load the model ({exc.__class__.__name__}: {first}); give a trained "
+            "Ultralytics detection .pt file",
+        ) from None
     if model.task != "detect":
         raise located(weights, f"a {model.task!r} model; the metric needs a detection model")
     if isinstance(model.model, (str, Path)):  # an exported format (ONNX, TensorRT, ...)

@@ -14,19 +14,18 @@ only the scenes ``dataset.json`` puts in that split.
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-import yaml
 from PIL import Image, UnidentifiedImageError
 
 from seahaze.dataset.splits import scene_splits, split_order
 from seahaze.metric.errors import MetricInputError, located
 from seahaze.visibility import CLEAN_LEVEL, is_level_name, level_name
+from seahaze.yamlguard import MAX_SCENE_BYTES, YamlLimitError, compose_limited, read_limited_text
 
 IMAGE_SUFFIXES: tuple[str, ...] = (".png", ".jpg", ".jpeg")
 """Image files recognised in ``images/<level>/`` (the renderer writes PNG)."""
@@ -209,12 +208,18 @@ class ImageTruth:
 
 def _class_names(path: Path, doc: object) -> tuple[str, ...]:
     names = doc.get("names") if isinstance(doc, dict) else None
+    values = names.values() if isinstance(names, dict) else names
+    if isinstance(values, Iterable) and not all(
+        isinstance(n, str | int | float) and not isinstance(n, bool) for n in values
+    ):
+        raise located(path, "names must be class names (strings), not lists or mappings")
     if isinstance(names, list) and names:
         return tuple(str(n) for n in names)
     if isinstance(names, dict) and names:
         keys = sorted(names, key=str)
         if sorted(k for k in keys if isinstance(k, int)) != list(range(len(keys))):
-            raise located(path, f"names must map the class ids 0..N-1 to names, got ids {keys}")
+            shown = ", ".join(str(k)[:20] for k in keys[:10]) + (", …" if len(keys) > 10 else "")
+            raise located(path, f"names must map the class ids 0..N-1 to names, got ids {shown}")
         return tuple(str(names[k]) for k in range(len(keys)))
     raise located(path, "missing 'names' (a list or a {0: name, 1: ...} mapping of classes)")
 
@@ -236,9 +241,12 @@ def load_dataset(root: Path | str, split: str | None = None) -> Dataset:
             "missing; a seahaze dataset has data.yaml, images/<level>/ and labels/<level>/",
         )
     try:
-        doc = yaml.safe_load(data_yaml.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise located(data_yaml, f"cannot parse YAML ({exc.__class__.__name__})") from None
+        # Limited like a scene file: size, nesting and alias expansion are checked before
+        # anything walks it (a deep or "billion laughs" data.yaml was a traceback or a hang).
+        text = read_limited_text(data_yaml, MAX_SCENE_BYTES, "data.yaml", "expected YAML")
+        doc, _ = compose_limited(text)
+    except YamlLimitError as exc:
+        raise located(data_yaml, exc.message, exc.line or None) from None
     names = _class_names(data_yaml, doc)
     images = root / "images"
     if not images.is_dir():
@@ -251,13 +259,16 @@ def load_dataset(root: Path | str, split: str | None = None) -> Dataset:
 
 
 def _split_members(manifest: Path, split: str) -> frozenset[str]:
-    """The scenes ``manifest`` puts in ``split``; raises for a missing manifest or split."""
+    """The scenes ``manifest`` puts in ``split``; raises for a missing, unreadable or damaged
+    manifest (read as ``seahaze export`` reads it: hostile JSON is a message) or split."""
+    from seahaze.export.source import ExportError, read_manifest
+
+    if not manifest.exists() and not manifest.is_symlink():
+        raise located(manifest, "missing; --split needs the dataset's manifest")
     try:
-        data = json.loads(manifest.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise located(manifest, "missing; --split needs the dataset's manifest") from None
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        raise located(manifest, f"cannot read the manifest ({exc.__class__.__name__})") from None
+        data = read_manifest(manifest)
+    except ExportError as exc:
+        raise MetricInputError(str(exc)) from None
     allowed = split_order(data)
     if split not in allowed:
         raise located(manifest, f"--split {split!r}: the dataset's splits are {', '.join(allowed)}")

@@ -25,14 +25,22 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
+import stat
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from itertools import pairwise
 from pathlib import Path
+from typing import Any
 
 from seahaze.metric.errors import MetricInputError, located
 from seahaze.visibility import REGULATION_CLASSES, RegulationClass, regulation_class
+
+MAX_TABLE_BYTES = 1 << 20
+"""Largest table file read (1 MiB; a table of 64 levels is about 10 kB)."""
+MAX_TABLE_DEPTH = 32
+"""Deepest JSON nesting read (a table needs 3: levels[i].map50; kept extras a few more)."""
 
 TABLE_FORMAT = "seahaze.metric.table/1"
 """The ``format`` tag written into (and expected in) a table's JSON file."""
@@ -356,15 +364,13 @@ def load_table(path: Path | str) -> CalibrationTable:
                 path = candidate
                 break
     if not path.is_file():
-        raise located(
-            path,
-            "calibration table not found (expected a .json or .csv file "
-            "written by 'seahaze metric calibrate')",
+        what = (
+            "not a regular file (a folder, FIFO or device); expected a calibration table"
+            if path.exists()
+            else "calibration table not found"
         )
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise located(path, f"cannot read the table ({exc})") from None
+        raise located(path, f"{what} (a .json or .csv file written by 'seahaze metric calibrate')")
+    text = _read_text(path)
     is_json = path.suffix.lower() == ".json" or (
         path.suffix.lower() != ".csv" and text.lstrip().startswith("{")
     )
@@ -376,21 +382,63 @@ def load_table(path: Path | str) -> CalibrationTable:
         raise located(path, str(exc)) from None
 
 
+def _read_text(path: Path) -> str:
+    """The UTF-8 text of the table file (a BOM dropped), at most :data:`MAX_TABLE_BYTES`; the
+    file is opened without blocking (``is_file`` was checked, but it may be swapped since)."""
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+        with os.fdopen(fd, "rb") as handle:
+            if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
+                raise located(path, "not a regular file; expected a .json or .csv table")
+            raw = handle.read(MAX_TABLE_BYTES + 1)
+    except OSError as exc:
+        raise located(path, f"cannot read the table ({exc.strerror or exc})") from None
+    if len(raw) > MAX_TABLE_BYTES:
+        raise located(path, "larger than 1 MiB; a calibration table is a few kB")
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise located(path, "not UTF-8 text; expected a .json or .csv table", line) from None
+
+
+def _shown(text: object) -> str:
+    """A value for a one-line message: a short repr of a string or number, else its kind (a
+    nested value's repr could be pages long or recurse)."""
+    if isinstance(text, str):
+        return repr(text[:40] + ("…" if len(text) > 40 else ""))
+    if isinstance(text, float) or (isinstance(text, int) and abs(text) < 10**40):
+        return repr(text)
+    if isinstance(text, int):
+        return "an integer of more than 40 digits"
+    return {dict: "an object", list: "a list", type(None): "null"}.get(type(text), "a value")
+
+
 def _number(path: Path, line: int | None, column: str, text: object) -> float:
     """``text`` as a float, or a located error naming the column."""
-    if isinstance(text, bool):
-        text = str(text)
+    if isinstance(text, bool) or not isinstance(text, str | int | float):
+        raise located(path, f"{column} must be a number, got {_shown(text)}", line)
     try:
-        value = float(text)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise located(path, f"{column} must be a number, got {text!r}", line) from None
+        value = float(text)
+    except ValueError:
+        raise located(path, f"{column} must be a number, got {_shown(text)}", line) from None
+    except OverflowError:  # an integer beyond float
+        raise located(path, f"{column} must be a finite number, got {_shown(text)}", line) from None
     if not math.isfinite(value):
-        raise located(path, f"{column} must be a finite number, got {text!r}", line)
+        raise located(path, f"{column} must be a finite number, got {_shown(text)}", line)
     return value
 
 
 def _table_from_csv(path: Path, text: str) -> CalibrationTable:
     rows = csv.reader(text.splitlines())
+    try:
+        return _rows_to_table(path, rows)
+    except csv.Error as exc:  # a NUL byte, a field past the csv module's size limit
+        raise located(path, f"not a CSV table ({exc})", rows.line_num) from None
+
+
+def _rows_to_table(path: Path, rows: Any) -> CalibrationTable:
+    """The table of the CSV reader ``rows`` (a header, then one row per level)."""
     header: list[str] | None = None
     points: list[CalibrationPoint] = []
     for row in rows:
@@ -405,7 +453,7 @@ def _table_from_csv(path: Path, text: str) -> CalibrationTable:
                 raise located(
                     path,
                     f"header must name the columns {','.join(CSV_COLUMNS)}, "
-                    f"got {','.join(cells)!r}",
+                    f"got {_shown(','.join(cells))}",
                     line,
                 )
             continue
@@ -435,10 +483,19 @@ def _table_from_json(path: Path, text: str) -> CalibrationTable:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
         raise located(path, f"not valid JSON ({exc.msg})", exc.lineno) from None
+    except RecursionError:
+        raise located(path, f"JSON nested deeper than {MAX_TABLE_DEPTH}; not a table") from None
+    except ValueError as exc:  # an integer of more than 4300 digits
+        raise located(path, f"not a usable JSON table ({str(exc).splitlines()[0]})") from None
+    if _depth(doc) > MAX_TABLE_DEPTH:
+        raise located(path, f"JSON nested deeper than {MAX_TABLE_DEPTH}; not a table")
     if not isinstance(doc, dict) or not isinstance(doc.get("levels"), list):
         raise located(
             path, "expected a JSON object with a 'levels' list of {visibility_m, map50} objects"
         )
+    for key in ("detector", "evaluator", "dataset"):
+        if doc.get(key) is not None and not isinstance(doc[key], str):
+            raise located(path, f"{key} must be a name (a string) or null, got {_shown(doc[key])}")
     points: list[CalibrationPoint] = []
     for i, row in enumerate(doc["levels"]):
         if not isinstance(row, dict) or "visibility_m" not in row or "map50" not in row:
@@ -468,12 +525,31 @@ def _table_from_json(path: Path, text: str) -> CalibrationTable:
     )
 
 
+def _depth(doc: object) -> int:
+    """Nesting depth of a JSON document, without recursion (stops past the limit)."""
+    deepest, stack = 0, [(doc, 1)]
+    while stack and deepest <= MAX_TABLE_DEPTH:
+        item, depth = stack.pop()
+        deepest = max(deepest, depth)
+        if isinstance(item, dict):
+            stack += [(v, depth + 1) for v in item.values()]
+        elif isinstance(item, list):
+            stack += [(v, depth + 1) for v in item]
+    return deepest
+
+
 def _opt_str(value: object) -> str | None:
     return None if value is None else str(value)
 
 
 def _opt_float(value: object) -> float | None:
-    return float(value) if isinstance(value, int | float) and not isinstance(value, bool) else None
+    if not isinstance(value, int | float) or isinstance(value, bool):
+        return None
+    try:
+        number = float(value)
+    except OverflowError:  # an integer beyond float: not a score
+        return None
+    return number if math.isfinite(number) else None
 
 
 def _opt_int(value: object) -> int | None:
