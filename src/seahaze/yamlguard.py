@@ -29,7 +29,8 @@ both construct with PyYAML's safe constructor."""
 
 
 class YamlLimitError(ValueError):
-    """Text that is not read: ``line`` (1-based, 0 if none) and a one-line ``message``."""
+    """Text that is not read: ``line`` (1-based; 0 for a file not read at all, whose problem
+    is the whole file) and a one-line ``message``."""
 
     def __init__(self, line: int, message: str):
         self.line, self.message = line, message
@@ -79,9 +80,10 @@ def compose_limited(text: str) -> tuple[Any, yaml.Node | None]:
     (syntax, several documents, an integer of more than 4300 digits, a date like 2024-13-45).
     """
     if len(text) > MAX_SCENE_BYTES:
-        raise YamlLimitError(0, f"{len(text):,} characters; at most 1 MiB")
+        raise YamlLimitError(1, f"{len(text):,} characters; at most 1 MiB")
     _check_nesting(text)
     loader = None
+    node = None
     try:
         loader = _LOADER(text)
         node = loader.get_single_node()
@@ -90,19 +92,51 @@ def compose_limited(text: str) -> tuple[Any, yaml.Node | None]:
         _check_structure(node)
         return loader.construct_document(node), node
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = mark.line + 1 if mark is not None else 0
+        # The problem's place, else its context's (a second document: where it starts).
+        mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+        line = mark.line + 1 if mark is not None else 1
+        if isinstance(exc, yaml.reader.ReaderError):  # a control character: its position
+            line = text.count("\n", 0, max(0, exc.position)) + 1
         reason = getattr(exc, "problem", None) or str(exc).splitlines()[0]
         raise YamlLimitError(line, f"not valid YAML: {reason}") from None
     except (ValueError, OverflowError) as exc:
         if isinstance(exc, YamlLimitError):
             raise
-        # The constructor's own errors; PyYAML gives no line for them.
+        # The constructor's own errors (a date like 2024-13-45, an integer of 5000 digits):
+        # PyYAML gives no line for them, the scalar that raises is looked for.
         reason = str(exc).split(";")[0].splitlines()[0] if str(exc) else type(exc).__name__
-        raise YamlLimitError(0, f"not valid YAML: {reason}") from None
+        line = _failing_scalar_line(node) if node is not None else 1
+        raise YamlLimitError(line, f"not valid YAML: {reason}") from None
     finally:
         if loader is not None:
             loader.dispose()
+
+
+def _failing_scalar_line(root: yaml.Node) -> int:
+    """The 1-based line of the first scalar under ``root`` (in file order) that PyYAML's safe
+    constructor cannot turn into a value; 1 if each does on its own."""
+    scalars: list[yaml.ScalarNode] = []
+    stack = [root]
+    seen: set[int] = set()
+    while stack:  # iterative and once per node: aliases share nodes, and depth is no limit
+        node = stack.pop()
+        if id(node) in seen:
+            continue
+        seen.add(id(node))
+        if isinstance(node, yaml.ScalarNode):
+            scalars.append(node)
+        else:
+            stack += _children(node)
+    constructor = yaml.SafeLoader("")
+    try:
+        for node in sorted(scalars, key=lambda n: (n.start_mark.line, n.start_mark.column)):
+            try:
+                constructor.construct_object(node)
+            except (ValueError, OverflowError, yaml.YAMLError):
+                return node.start_mark.line + 1
+    finally:
+        constructor.dispose()
+    return 1
 
 
 def _check_nesting(text: str) -> None:
@@ -125,7 +159,7 @@ def _check_nesting(text: str) -> None:
     except yaml.YAMLError as exc:
         if "nesting depth" in str(getattr(exc, "problem", "")):
             mark = getattr(exc, "problem_mark", None)
-            raise _too_deep(mark.line + 1 if mark is not None else 0) from None
+            raise _too_deep(mark.line + 1 if mark is not None else 1) from None
 
 
 def _too_deep(line: int) -> YamlLimitError:

@@ -37,7 +37,11 @@ def parse_vis(text: str | None) -> list[float] | None:
 
 
 def load_scenes(paths: list[str]) -> list[tuple[SceneSpec, str]]:
-    """Every scene file, validated; all problems of all files in one :class:`UsageError`."""
+    """Every scene file, validated; all problems of all files in one :class:`UsageError`.
+
+    Every problem is one line ``seahaze: error: FILE:LINE: FIELD: MESSAGE``, whether a file
+    has one or many, for ``validate``, ``render`` and ``verify`` alike.
+    """
     from ..sceneio import SceneFileError, load_scene
 
     scenes, problems = [], []
@@ -46,6 +50,9 @@ def load_scenes(paths: list[str]) -> list[tuple[SceneSpec, str]]:
             scenes.append(load_scene(path))
         except SceneFileError as err:
             problems += err.problems
+    if len(problems) == 1:
+        raise UsageError(str(problems[0]))  # main() puts "seahaze: error: " before one line
     if problems:
-        raise UsageError("\n".join(str(p) for p in problems))
+        # main() prints a message of several lines as it is: each gets the prefix here.
+        raise UsageError("\n".join(f"seahaze: error: {p}" for p in problems))
     return scenes
