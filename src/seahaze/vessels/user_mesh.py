@@ -134,6 +134,21 @@ def _load_geometries(path: Path) -> list[tuple[str, trimesh.Trimesh]]:
     return named
 
 
+def _nonfinite_vertices(path: Path) -> int:
+    """Vertices of the file with a NaN or infinite coordinate, as written: trimesh's processed
+    load drops such a vertex and every face that uses it, which would silently change the
+    mesh (a PLY face lost) instead of saying the file is damaged."""
+    try:
+        raw = trimesh.load_scene(str(path), process=False)
+    except Exception:  # the processed load already read it; its errors are the ones to show
+        return 0
+    count = 0
+    for geometry in raw.geometry.values():
+        vertices = np.asarray(getattr(geometry, "vertices", np.zeros((0, 3))), dtype=np.float64)
+        count += int((~np.isfinite(vertices)).any(axis=-1).sum()) if vertices.size else 0
+    return count
+
+
 class SubmergedMeshError(ValueError):
     """A user mesh whose draft is not less than its scaled height: sunk that deep, nothing of
     it stays above the waterline, so it could be neither seen nor labelled."""
@@ -184,6 +199,12 @@ def load_user_mesh(
     if not geometries:
         raise ValueError(f"mesh file {path} contains no triangles")
 
+    bad = _nonfinite_vertices(path)
+    if bad:
+        raise ValueError(
+            f"mesh {path} has {bad} vertex(es) with a NaN or infinite coordinate; allowed: "
+            "finite coordinates"
+        )
     all_vertices = np.vstack([np.asarray(m.vertices) for _, m in geometries]) @ rotation.T
     lo, hi = all_vertices.min(axis=0), all_vertices.max(axis=0)
     extent = hi - lo
