@@ -255,6 +255,22 @@ def test_bad_render_flags_are_refused_before_rendering(flags, tmp_path, no_rende
     assert not (out / "dataset.json").exists()
 
 
+def test_a_layout_that_fails_only_under_another_seed_is_located_in_its_file(tmp_path, no_render):
+    """The file's own layout is checked at load; one drawn with ``--seed`` (or variation) is
+    checked before rendering, and named by the file and the line of its ``vessels:`` block."""
+    scene = tmp_path / "tight.yaml"
+    scene.write_text(
+        "name: tight\ncamera: {resolution: [32, 18]}\nvessels:\n  sample:\n    count: 2\n"
+        "    classes: {container_ship: 1}\n    distance_m: [600, 700]\n"
+        "    bearing_spread_deg: 12\nrender: {spp: 1}\n"
+    )
+    assert run(["validate", str(scene)])[0] == 0
+    code, _, err = run(["render", str(scene), "--seed", "8", "--out", str(tmp_path / "o")])
+    assert_refused(code, err)
+    assert err.startswith(f"seahaze: error: {scene}:3: vessels.sample: scene tight: "), err
+    assert "could not place vessel" in err and len(err.strip().splitlines()) == 1
+
+
 def test_long_jobs_give_their_estimate_and_need_yes(tmp_path, no_render):
     args = ["--scenes", "4", "--res", "1280x720", "--spp", "4000", "--vis", "300..4000"]
     code, _, err = run(["render", str(TINY), "--out", str(tmp_path / "o"), *args])

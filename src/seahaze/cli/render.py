@@ -87,17 +87,20 @@ def _check_out(out: Path) -> Any:
         raise UsageError(f"--out {out}: cannot read it ({err.strerror or err})") from None
 
 
-def _check_layouts(plan: Any) -> None:
+def _check_layouts(plan: Any, files: dict[str, str]) -> None:
     """Every scene's vessel layout can be built (its own seed and variation): a vessel over the
-    camera or an impossible ``vessels.sample`` is bad input, not a failed scene hours later."""
+    camera or an impossible ``vessels.sample`` is bad input, not a failed scene hours later.
+    ``files``: each template's scene file, where the line of its ``vessels:`` block is shown
+    (a varied scene has no line of its own)."""
     from ..sceneio import layout_problems
 
     problems = []
     for job in plan.jobs:
         if job.frame:  # a sequence's frames share its spec: its first frame checks them all
             continue
+        where = _block_location(files.get(job.template), "vessels")
         problems += [
-            f"scene {job.name}: {'.'.join(str(p) for p in loc)}: {message}"
+            f"{where}{'.'.join(str(p) for p in loc)}: scene {job.name}: {message}"
             for loc, message in layout_problems(job.spec)[:1]
         ]
         if len(problems) == 5:
@@ -107,6 +110,24 @@ def _check_layouts(plan: Any) -> None:
         raise UsageError(problems[0])
     if problems:
         raise UsageError("\n".join(f"seahaze: error: {line}" for line in problems))
+
+
+def _block_location(file: str | None, key: str) -> str:
+    """``FILE:LINE: `` of the top-level ``key`` of a scene file already validated (line 1
+    where the file has no such key), or nothing for a scene without a file."""
+    if file is None:
+        return ""
+    from ..yamlguard import YamlLimitError, compose_limited, read_limited_text
+
+    line = 1
+    try:
+        _, root = compose_limited(read_limited_text(Path(file), 1 << 20, "a scene file", ""))
+    except YamlLimitError:
+        root = None
+    for name, _value in getattr(root, "value", None) or []:
+        if getattr(name, "value", None) == key:
+            line = name.start_mark.line + 1
+    return f"{file}:{line}: "
 
 
 def _warn_below_validated_range(plan: Any) -> None:
@@ -146,16 +167,23 @@ def _estimate(
 
 
 def _confirm(job: limits.Estimate, reason: str | None, args: argparse.Namespace) -> None:
-    """Print the estimate of a long job; refuse one of an hour or more, or one that needs
-    more memory than the machine has, without --yes."""
+    """Refuse a job of an hour or more, or one that needs more memory than the machine has,
+    without --yes (before anything is planned)."""
     if reason and not args.yes:
         raise UsageError(
             f"{reason}: {job.describe()}. Pass --yes to start it, or lower --res, --spp, "
             "--scenes, --workers or the levels"
         )
-    if job.scenes and (reason or job.seconds >= limits.ANNOUNCE_SECONDS) and not args.quiet:
+
+
+def _announce(job: limits.Estimate, reason: str | None, args: argparse.Namespace) -> None:
+    """Print the estimate of a long job, or say that kernels compile first, once every check
+    passed (a refusal after it would read as if the work had started)."""
+    if args.quiet or not job.scenes:
+        return
+    if reason or job.seconds >= limits.ANNOUNCE_SECONDS:
         print(f"seahaze: estimated {job.describe()}", file=sys.stderr)
-    elif job.compile_seconds >= limits.ANNOUNCE_COMPILE_SECONDS and not args.quiet:
+    elif job.compile_seconds >= limits.ANNOUNCE_COMPILE_SECONDS:
         # A first render of a new size or sample count spends most of its time compiling.
         print(
             f"seahaze: compiling kernels for a new render first (about "
@@ -255,7 +283,7 @@ def cmd_render(args: argparse.Namespace) -> int:
         return 0
     _confirm(job, reason, args)
     plan = plan or make_plan()
-    _check_layouts(plan)
+    _check_layouts(plan, {name: path for path, (_, name) in zip(paths, scenes, strict=True)})
     _warn_below_validated_range(plan)
     if args.executor == "local":
         # A variant that cannot run here is bad input, not a failure of every scene. (Dask
@@ -265,6 +293,7 @@ def cmd_render(args: argparse.Namespace) -> int:
                 select_variant(variant)
         except VariantError as err:
             raise UsageError(str(err)) from None
+    _announce(job, reason, args)
     try:
         reporter = Reporter(quiet=args.quiet, log=Path(args.log) if args.log else None)
     except OSError as err:
