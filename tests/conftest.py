@@ -138,7 +138,9 @@ def load_flat_scene(
 
 @pytest.fixture(scope="session")
 def dataset(tmp_path_factory):
-    """The default scene rendered once by the CLI at 64×36, 2 spp, levels 300 and 4000 m."""
+    """The default scene rendered once by the CLI at 64×36, 2 spp, levels 300 and 4000 m, with
+    ``--split none``: the dataset without a split (train = val = every clean image) that the
+    tests of that layout read (one scene is too few for a split anyway)."""
     from pathlib import Path
 
     from seahaze.cli import main
@@ -156,6 +158,8 @@ def dataset(tmp_path_factory):
         "2",
         "--out",
         str(out),
+        "--split",
+        "none",
         "--quiet",
     ]
     assert main(args) == 0

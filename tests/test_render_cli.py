@@ -97,6 +97,8 @@ def test_same_seed_same_bytes(dataset, tmp_path):
             "2",
             "--out",
             str(tmp_path),
+            "--split",
+            "none",  # the command of the dataset fixture, word for word
             "--quiet",
         ]
     )

@@ -5,18 +5,18 @@ N``) N scenes named ``<template>_00000`` …, scene ``i`` drawing its camera hea
 state and vessel layout from the template's ``variation:`` ranges with a seed derived from
 (master seed, template name, ``i``) (:func:`seahaze.seeds.scene_seed`). With ``split``
 fractions every scene also gets its train/val/test split from (master seed, scene name) alone
-(:meth:`seahaze.dataset.splits.SplitFractions.split_of`), so the scenes of a grown batch keep
-theirs.
+(:func:`seahaze.dataset.splits.assign_splits`), so the scenes of a grown batch keep theirs (a
+batch of a few scenes excepted, where an empty train or val takes the nearest scene).
 """
 
 from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
-from ..dataset.splits import SplitFractions
+from ..dataset.splits import SplitAssignment, SplitFractions, assign_splits
 from ..seeds import scene_seed, variation_rng
 from ..spec import SceneSpec
 from .errors import DatasetError
@@ -111,11 +111,20 @@ class BatchPlan:
     threshold: str
     count: int | None = None
     master_seeds: dict[str, int] = field(default_factory=dict)
-    split: SplitFractions | None = None
+    assignment: SplitAssignment | None = None
+    """Every scene's split and the fractions asked for; None for a batch without a split."""
+
+    @property
+    def split(self) -> SplitFractions | None:
+        """The share of scenes each split got (None without a split): the splits with a share
+        above 0 are the ones that get a list file and a ``data.yaml`` entry. The fractions
+        asked for are ``assignment.fractions``; ``config`` records those."""
+        return None if self.assignment is None else self.assignment.shares()
 
     def config(self) -> dict[str, Any]:
         """The manifest's ``config``: dataset-wide settings, for ``--scenes`` the batch, and for
-        ``--split`` the fractions (absent without: the config of older folders is unchanged)."""
+        a split the fractions asked for (absent without: the config of older folders is
+        unchanged)."""
         first = self.jobs[0].spec
         batch = (
             None
@@ -129,8 +138,8 @@ class BatchPlan:
             "resolution": list(first.camera.resolution),
             "batch": batch,
         }
-        if self.split is not None:
-            config["split"] = self.split.as_dict()
+        if self.assignment is not None:
+            config["split"] = self.assignment.fractions.as_dict()
         return config
 
 
@@ -173,8 +182,9 @@ def plan_scenes(
     ``<template>_<i>`` (5 digits or more), each with :func:`seahaze.seeds.scene_seed` of the
     master seed (``master_seed``, else the template's ``render.seed``) and :func:`vary_scene`
     applied. With ``split``, each scene's split comes from its master seed (the batch's, else
-    its own ``render.seed``) and its name. Raises :class:`DatasetError` for scenes that cannot
-    share one dataset.
+    its own ``render.seed``) and its name, as :func:`~seahaze.dataset.splits.assign_splits`
+    gives it (a sequence's frames all take the sequence's). Raises :class:`DatasetError` for
+    scenes that cannot share one dataset.
     """
     if not templates:
         raise DatasetError("no scene to render")
@@ -191,11 +201,12 @@ def plan_scenes(
                 "pass --vis to use the same levels"
             )
     jobs: list[SceneJob] = []
+    masters: list[int] = []  # each job's master seed, which (with its name) fixes its split
     seeds: dict[str, int] = {}
     if count is None:
         for spec, name in templates:
-            scene_split = split.split_of(spec.render.seed, name) if split else None
-            jobs.append(SceneJob(name, spec, name, None, scene_split))
+            jobs.append(SceneJob(name, spec, name, None))
+            masters.append(spec.render.seed)
     else:
         width = max(5, len(str(count - 1)))
         for spec, name in templates:
@@ -203,9 +214,13 @@ def plan_scenes(
             seeds[name] = master
             for i in range(count):
                 seed = scene_seed(master, name, i)
-                scene = f"{name}_{i:0{width}d}"
-                scene_split = split.split_of(master, scene) if split else None
-                jobs.append(SceneJob(scene, vary_scene(spec, seed), name, i, scene_split))
+                jobs.append(SceneJob(f"{name}_{i:0{width}d}", vary_scene(spec, seed), name, i))
+                masters.append(master)
+    assignment = None
+    if split is not None:
+        # Before the frames are expanded: a sequence is one scene of the split.
+        assignment = assign_splits(split, [(j.name, m) for j, m in zip(jobs, masters, strict=True)])
+        jobs = [replace(job, split=assignment.splits[job.name]) for job in jobs]
     jobs = expand_frames(jobs)
     counts = Counter(job.name for job in jobs)
     duplicates = sorted(name for name, n in counts.items() if n > 1)
@@ -214,5 +229,5 @@ def plan_scenes(
             f"two scenes share the name(s) {duplicates[:5]}; set 'name:' in the YAML"
         )
     return BatchPlan(
-        tuple(jobs), tuple(first.haze.levels), str(first.haze.threshold), count, seeds, split
+        tuple(jobs), tuple(first.haze.levels), str(first.haze.threshold), count, seeds, assignment
     )

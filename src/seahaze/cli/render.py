@@ -144,6 +144,24 @@ def _warn_below_validated_range(plan: Any) -> None:
             )
 
 
+def _say_split(plan: Any, source: str, quiet: bool) -> None:
+    """The split the batch uses, in one line: a warning (shown with --quiet too) when the batch
+    is too small for it, else a note."""
+    if plan.assignment is None:
+        if not quiet:
+            print(
+                f"[seahaze] split: none ({source}): train and val of data.yaml are every clean "
+                "image",
+                file=sys.stderr,
+            )
+        return
+    warning = plan.assignment.warning()
+    if warning is not None:
+        print(f"seahaze: warning: split ({source}): {warning}", file=sys.stderr)
+    elif not quiet:
+        print(f"[seahaze] split ({source}): {plan.assignment.describe()}", file=sys.stderr)
+
+
 def _estimate(
     scenes: list[tuple[Any, str]], args: argparse.Namespace, folder: Any, make_plan: Any
 ) -> tuple[Any, limits.Estimate, str | None]:
@@ -219,7 +237,7 @@ def cmd_render(args: argparse.Namespace) -> int:
         plan_scenes,
         run_batch,
     )
-    from ..dataset.splits import SplitError, SplitFractions
+    from ..dataset.splits import SplitError, resolve_split
     from ..render.variant import VariantError, select_variant
     from ..spec import OverrideError, with_overrides
 
@@ -232,9 +250,11 @@ def cmd_render(args: argparse.Namespace) -> int:
     if args.spp is not None and args.spp < 1:
         raise UsageError(f"--spp {args.spp}: must be >= 1")
     try:
-        split = SplitFractions.parse(args.split) if args.split is not None else None
+        # Without --split: a folder's recorded split (resuming stays the same config), else
+        # the default (docs/dataset-format.md#splits).
+        split, split_from = resolve_split(args.split, folder.manifest)
     except SplitError as err:
-        raise UsageError(f"--split {args.split!r}: {err}") from None
+        raise UsageError(f"--split {args.split!r}: {err}; or 'none' for no split") from None
     if args.frames is not None and not 1 <= args.frames <= limits.MAX_SCENES:
         raise UsageError(f"--frames {args.frames}: must be within 1..{limits.MAX_SCENES:,}")
     if args.fps is not None and not 0.0 < args.fps <= 120.0:
@@ -285,6 +305,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     plan = plan or make_plan()
     _check_layouts(plan, {name: path for path, (_, name) in zip(paths, scenes, strict=True)})
     _warn_below_validated_range(plan)
+    _say_split(plan, split_from, args.quiet)
     if args.executor == "local":
         # A variant that cannot run here is bad input, not a failure of every scene. (Dask
         # workers choose theirs: the coordinator may be a login node without Mitsuba's LLVM.)
@@ -425,7 +446,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="scene-disjoint train/val/test splits, e.g. 0.8,0.1,0.1: each scene's split comes "
         "from a hash of (master seed, scene name), so a scene keeps it when the batch grows; "
         "recorded in dataset.json, used by data.yaml (train.txt, val.txt, test.txt) and by "
-        "'seahaze export' (default: no split; train and val are every clean image)",
+        "'seahaze export'; 'none': no split, train and val are every clean image (default: "
+        "0.8,0.1,0.1 in a new folder; an existing dataset keeps the split it was made with)",
     )
     parser.add_argument(
         "--workers",

@@ -5,8 +5,10 @@ OUT/images/clean/<scene>.png       OUT/images/v0300/<scene>.png ...
 OUT/labels/<level>/<scene>.txt     OUT/depth/<scene>.exr
 OUT/exr/<level>/<scene>.exr        OUT/meta/<scene>.json
 OUT/coco/<level>.json              OUT/README.md (the dataset card)
-OUT/train.txt OUT/val.txt OUT/test.txt (with --split: Ultralytics lists of the clean images)
-OUT/mot/<level>/<sequence>/gt/gt.txt  OUT/mot/<level>/<sequence>/seqinfo.ini  (sequences)
+OUT/train.txt OUT/val.txt OUT/test.txt (Ultralytics lists of the clean images; not with
+                                      --split none)
+OUT/mot/<level>/<sequence>/gt/gt.txt  OUT/mot/<level>/<sequence>/seqinfo.ini  (sequences: a
+OUT/mot/<level>/<sequence>/img1/000001.png ...  OUT/mot/<level>/seqmap.txt  MOTChallenge folder)
 """
 
 from __future__ import annotations
@@ -40,10 +42,24 @@ class Layout:
 
     def mot_gt(self, level: str, sequence: str) -> Path:
         """A sequence's MOTChallenge ground truth at one level (dataset/tracks.py)."""
-        return self.root / "mot" / level / sequence / "gt" / "gt.txt"
+        return self.mot_sequence(level, sequence) / "gt" / "gt.txt"
+
+    def mot_sequence(self, level: str, sequence: str) -> Path:
+        """A sequence's MOTChallenge folder at one level: ``seqinfo.ini``, ``img1/``, ``gt/``."""
+        return self.root / "mot" / level / sequence
 
     def mot_seqinfo(self, level: str, sequence: str) -> Path:
-        return self.root / "mot" / level / sequence / "seqinfo.ini"
+        return self.mot_sequence(level, sequence) / "seqinfo.ini"
+
+    def mot_frame(self, level: str, sequence: str, frame: int) -> Path:
+        """Frame ``frame`` (1-based, as MOTChallenge counts) of a sequence in its ``img1/``
+        folder: ``000001.png`` …, a link to the level's image (dataset/tracks.py)."""
+        return self.mot_sequence(level, sequence) / "img1" / f"{frame:06d}.png"
+
+    def mot_seqmap(self, level: str) -> Path:
+        """The list of a level's sequences in TrackEval's seqmap format (``name``, then one
+        sequence a line)."""
+        return self.root / "mot" / level / "seqmap.txt"
 
     def meta(self, scene: str) -> Path:
         return self.root / "meta" / f"{scene}.json"

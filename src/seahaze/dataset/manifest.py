@@ -19,6 +19,7 @@ from ..visibility import (
     level_name,
     regulation_class,
 )
+from .splits import SPLIT_NAMES
 
 FORMAT_VERSION = 1
 
@@ -49,8 +50,11 @@ def data_yaml_text(
     """Ultralytics dataset YAML: absolute root, train/val(/test), one split per level (clean
     included).
 
-    Without ``split_names`` (a dataset made without ``--split``) ``train`` and ``val`` are every
-    clean image; with them each is its list file (``train: train.txt``, :func:`split_list_text`).
+    Without ``split_names`` (a dataset made with ``--split none``, or before splits were the
+    default) ``train`` and ``val`` are every clean image; with them each is its list file
+    (``train: train.txt``, :func:`split_list_text`). Splits without a scene are not named: where
+    ``val`` is not (a batch of one scene, or a val fraction of 0), ``val`` is ``train.txt`` too,
+    since Ultralytics refuses a dataset YAML without ``val``.
     Every level is a split of its own with an absolute folder, every scene of the level: Ultralytics
     resolves only ``train``/``val``/``test``/``minival`` against ``path`` (any other split is taken
     relative to the working directory) and finds an image's labels only through an ``/images/``
@@ -60,13 +64,20 @@ def data_yaml_text(
     root = root.resolve()
     data: dict[str, Any] = {"path": str(root)}
     if split_names:
-        data.update({name: f"{name}.txt" for name in split_names})
+        lists = {name: f"{name}.txt" for name in split_names}
+        lists.setdefault("val", lists["train"])
+        data.update({name: lists[name] for name in SPLIT_NAMES if name in lists})
     else:
         data.update({"train": f"images/{CLEAN_LEVEL}", "val": f"images/{CLEAN_LEVEL}"})
     for name in [CLEAN_LEVEL, *level_names]:
         data[name] = str(root / "images" / name)
     data["names"] = dict(enumerate(class_names))
-    splits = "train/val/test: scene-disjoint splits" if split_names else "train/val: every scene"
+    if not split_names:
+        splits = "train/val: every scene"
+    elif "val" in split_names:
+        splits = "train/val/test: scene-disjoint splits"
+    else:
+        splits = "no val split: val is train"
     return (
         f"# seahaze dataset ({splits}); one split per visibility level, every scene\n"
         "# e.g. yolo val model=WEIGHTS.pt data=THIS_FILE split=v1000 (see README.md)\n"
