@@ -6,6 +6,12 @@ Apparent contrast (Koschmieder)
     :data:`HORIZON_SKY_BAND_DEG` above the horizon. Koschmieder's law predicts
     ``C(d) = C₀ exp(−σ d)``; a vessel farther than the visibility is flagged
     ``beyond_visibility`` (its contrast is below the threshold for a black object).
+
+    One horizon luminance serves every direction, so a vessel seen against the sea, or in fog
+    where the sea beside the waterline is darker than the horizon sky, reads a contrast it does
+    not have against what is behind it (a tanker at 2.6 km read about −0.05 at V = 300 m,
+    invisible in the image). :mod:`seahaze.visible` measures each vessel against its local
+    background: ``local_contrast`` and ``discernible`` beside this value.
 """
 
 from __future__ import annotations
@@ -16,6 +22,8 @@ import numpy as np
 
 from . import imaging
 from .labels import Box
+from .visibility import Threshold
+from .visible import LocalContrast
 from .world import SceneGeometry
 
 HORIZON_SKY_BAND_DEG = 2.0
@@ -23,6 +31,8 @@ HORIZON_SKY_BAND_DEG = 2.0
 
 LevelContrasts = dict[str, tuple[float, list[float | None]]]
 """Level name → (visibility in m, ``inf`` for clean; apparent contrast per vessel or None)."""
+LevelLocalContrasts = dict[str, list[LocalContrast]]
+"""Level name → per vessel its contrast against its local background (:mod:`seahaze.visible`)."""
 
 
 def horizon_luminance(
@@ -55,10 +65,14 @@ def vessel_meta(
     boxes: list[Box],
     footprint_px: np.ndarray,
     level_contrasts: LevelContrasts,
+    local: LevelLocalContrasts | None = None,
+    threshold: Threshold | str = Threshold.KOSCHMIEDER,
 ) -> list[dict[str, Any]]:
     """The ``vessels`` list of a scene's metadata: pose, speed through the water, size, box,
     visibility, and per level the apparent contrast and whether the vessel lies beyond the
-    visibility."""
+    visibility; with ``local``, also its contrast against its local background, the part of it
+    that gave that (brighter or darker than its background in the clean image) and the sky's
+    share in that background, and whether ``|C|`` exceeds ``threshold``'s ``eps``."""
     by_vessel = {b.vessel: b for b in boxes}
     out = []
     for v in geometry.vessels:
@@ -91,9 +105,25 @@ def vessel_meta(
                     level: {
                         "apparent_contrast": contrasts[v.index],
                         "beyond_visibility": distance > visibility,
+                        **_local_entry(local, level, v.index, threshold),
                     }
                     for level, (visibility, contrasts) in level_contrasts.items()
                 },
             }
         )
     return out
+
+
+def _local_entry(
+    local: LevelLocalContrasts | None, level: str, vessel: int, threshold: Threshold | str
+) -> dict[str, Any]:
+    """A level's local-contrast fields of one vessel (none without ``local``)."""
+    if local is None or level not in local:
+        return {}
+    measured = local[level][vessel]
+    return {
+        "local_contrast": measured.contrast,
+        "local_part": measured.part,
+        "local_sky_share": measured.sky_share,
+        "discernible": measured.discernible(threshold),
+    }

@@ -607,6 +607,14 @@ class LabelsSpec(_Spec):
         description="Smallest visible share of a vessel's unoccluded pixels that is labelled.",
         json_schema_extra=_unit("1"),
     )
+    write_visible: bool = Field(
+        False,
+        description="Also write per level the labels of the vessels seen in that level's image "
+        "(`labels_visible/<level>/`, `coco_visible/<level>.json`): those whose contrast "
+        "against their local background exceeds the threshold of `haze.threshold` (2 % or "
+        "5 %). `labels/` keeps every labelled vessel at every level, the MSVD paper's "
+        "protocol. See docs/metric.md.",
+    )
 
 
 EXPOSURE_RANGE = (1.0e-3, 1.0e3)

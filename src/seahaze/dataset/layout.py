@@ -5,6 +5,7 @@ OUT/images/clean/<scene>.png       OUT/images/v0300/<scene>.png ...
 OUT/labels/<level>/<scene>.txt     OUT/depth/<scene>.exr
 OUT/exr/<level>/<scene>.exr        OUT/meta/<scene>.json
 OUT/coco/<level>.json              OUT/README.md (the dataset card)
+OUT/labels_visible/<level>/<scene>.txt  OUT/coco_visible/<level>.json  (labels.write_visible)
 OUT/train.txt OUT/val.txt OUT/test.txt (Ultralytics lists of the clean images; not with
                                       --split none)
 OUT/mot/<level>/<sequence>/gt/gt.txt  OUT/mot/<level>/<sequence>/seqinfo.ini  (sequences: a
@@ -31,6 +32,14 @@ class Layout:
     def label(self, level: str, scene: str) -> Path:
         return self.root / "labels" / level / f"{scene}.txt"
 
+    def visible_label(self, level: str, scene: str) -> Path:
+        """The YOLO labels of the vessels seen in one level's image (``labels.write_visible``,
+        :mod:`seahaze.visible`)."""
+        return self.visible_label_dir(level) / f"{scene}.txt"
+
+    def visible_label_dir(self, level: str) -> Path:
+        return self.root / "labels_visible" / level
+
     def exr(self, level: str, scene: str) -> Path:
         return self.root / "exr" / level / f"{scene}.exr"
 
@@ -39,6 +48,10 @@ class Layout:
 
     def coco(self, level: str) -> Path:
         return self.root / "coco" / f"{level}.json"
+
+    def coco_visible(self, level: str) -> Path:
+        """The COCO ground truth of ``labels_visible/<level>`` (``labels.write_visible``)."""
+        return self.root / "coco_visible" / f"{level}.json"
 
     def mot_gt(self, level: str, sequence: str) -> Path:
         """A sequence's MOTChallenge ground truth at one level (dataset/tracks.py)."""
@@ -80,12 +93,18 @@ class Layout:
         """The Ultralytics list of the clean images of one split (``train.txt`` …)."""
         return self.root / f"{split}.txt"
 
-    def scene_files(self, scene: str, hazy_levels: list[str], exr: bool) -> list[Path]:
+    def scene_files(
+        self, scene: str, hazy_levels: list[str], exr: bool, visible: bool = False
+    ) -> list[Path]:
         """Every file one scene writes: meta, depth, and per level (clean first) its image,
-        label and (with ``exr``) linear EXR."""
+        label, (with ``exr``) linear EXR and (with ``visible``, ``labels.write_visible``) its
+        visible-object label. Without ``visible`` the list is that of a dataset made before the
+        option existed, so such a dataset's recorded digests still match."""
         files = [self.meta(scene), self.depth(scene)]
         for level in [CLEAN_LEVEL, *hazy_levels]:
             files += [self.image(level, scene), self.label(level, scene)]
             if exr:
                 files.append(self.exr(level, scene))
+            if visible:
+                files.append(self.visible_label(level, scene))
         return files

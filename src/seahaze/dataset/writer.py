@@ -2,7 +2,9 @@
 
 Images are the linear radiance exposed with the scene's one exposure and sRGB-encoded
 (:mod:`seahaze.imaging`); with ``write_exr`` the linear radiance is written too. Every level
-gets the same label file: the boxes do not depend on the haze.
+gets the same label file: the boxes do not depend on the haze (the MSVD paper's protocol). With
+``labels.write_visible`` each level also gets the labels of the vessels seen in its image
+(``labels_visible/<level>/``, :mod:`seahaze.visible`).
 """
 
 from __future__ import annotations
@@ -33,6 +35,8 @@ def write_scene(layout: Layout, scene: SceneRender) -> None:
         write.result()
     for level, _, _ in images:
         fileio.write_text(layout.label(level, name), scene.label_text)
+    for level, text in (scene.visible_labels or {}).items():
+        fileio.write_text(layout.visible_label(level, name), text)
     fileio.write_exr(layout.depth(name), {"Z": scene.geometry.distance_m})
     fileio.write_json(layout.meta(name), scene.meta)
 

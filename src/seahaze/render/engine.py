@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import annotate, imaging, labels, motion
+from .. import annotate, imaging, labels, motion, visible
 from ..camera import Camera
 from ..seeds import RenderPass, render_seed
 from ..spec import SceneSpec
@@ -83,6 +83,9 @@ class SceneRender:
     """Wall-clock seconds per pass (progress and logs only, never written to the dataset)."""
     clean_denoised: np.ndarray | None = None
     """(H, W, 3) float32 denoised clean radiance (``render.denoise: on``), else None."""
+    visible_labels: dict[str, str] | None = None
+    """Level name (clean first) → the YOLO label file of the vessels seen in its image
+    (``labels.write_visible``, :mod:`seahaze.visible`), else None."""
 
     @property
     def clean_image(self) -> np.ndarray:
@@ -327,6 +330,14 @@ def _assemble(
             annotate.apparent_contrasts(clean, geo.instance, n_vessels, clean_horizon),
         )
     }
+    # The same images for the contrast against each vessel's local background; the clean
+    # image splits every vessel into its brighter and darker parts (seahaze.visible).
+    local = {
+        name: visible.local_contrasts(
+            image, geo.instance, geo.distance_m, elevation, n_vessels, reference=clean
+        )
+        for name, image in [(CLEAN_LEVEL, clean), *((lv.name, lv.image) for lv in levels)]
+    }
     level_meta = []
     for level in levels:
         horizon = annotate.horizon_luminance(level.image, geo.distance_m, elevation)
@@ -366,7 +377,9 @@ def _assemble(
             "box_half_width_m": session.loaded.box_half_width_m,
         },
         "levels": level_meta,
-        "vessels": annotate.vessel_meta(geometry, boxes, geo.footprint_px, contrasts),
+        "vessels": annotate.vessel_meta(
+            geometry, boxes, geo.footprint_px, contrasts, local, spec.haze.threshold
+        ),
         "render": render_meta(spec),
     }
     return SceneRender(
@@ -382,7 +395,25 @@ def _assemble(
         spec.render.write_exr,
         timings,
         clean_denoised,
+        _visible_labels(spec, boxes, local, camera),
     )
+
+
+def _visible_labels(
+    spec: SceneSpec, boxes: list[labels.Box], local: annotate.LevelLocalContrasts, camera: Camera
+) -> dict[str, str] | None:
+    """Per level the YOLO text of the boxes of the vessels discernible in its image, with
+    ``labels.write_visible``; else None."""
+    if not spec.labels.write_visible:
+        return None
+    return {
+        name: labels.yolo_text(
+            visible.visible_boxes(boxes, contrasts, spec.haze.threshold),
+            camera.width,
+            camera.height,
+        )
+        for name, contrasts in local.items()
+    }
 
 
 def render_meta(spec: SceneSpec) -> dict[str, Any]:
