@@ -290,3 +290,38 @@ def test_without_the_option_the_dataset_is_as_before(pair, tmp_path):
         }
 
     assert digests(plain) == digests(pair)
+
+
+def test_resume_checks_and_force_prunes_the_visible_labels(pair, tmp_path):
+    """A finished scene's visible labels are part of its files: a damaged one is found by the
+    content hash and rendered again; ``--force`` for fewer levels deletes those of the level
+    dropped, and its visible COCO file."""
+    import shutil
+
+    out = tmp_path / "out"
+    shutil.copytree(pair, out)
+    scene = tmp_path / "pair.yaml"
+    scene.write_text(SCENE.replace("WRITE", "true"))
+    damaged = out / "labels_visible" / "v0300" / "pair.txt"
+    original = damaged.read_bytes()
+    damaged.write_text("")  # a valid, empty label file: only the content hash tells
+    code, stdout, err = run_cli(["render", str(scene), "--out", str(out)])
+    assert code == 0 and "content hash differs" in err and "wrote 1 scene(s)" in stdout
+    assert damaged.read_bytes() == original
+    code, _, err = run_cli(["render", str(scene), "--out", str(out), "--vis", "4000", "--force"])
+    assert code == 0, err
+    assert not (out / "labels_visible" / "v0300").exists()
+    assert not (out / "coco_visible" / "v0300.json").exists()
+    assert (out / "labels_visible" / "v4000" / "pair.txt").read_bytes() == (
+        pair / "labels_visible" / "v4000" / "pair.txt"
+    ).read_bytes()
+
+
+def run_cli(args: list[str]) -> tuple[int, str, str]:
+    import contextlib
+    import io
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([*args, "--quiet"])
+    return code, out.getvalue(), err.getvalue()

@@ -33,8 +33,20 @@ DATA_YAML_MARK = "# seahaze dataset"
 MAX_MANIFEST_BYTES = 1 << 30
 MAX_MANIFEST_DEPTH = 64
 STATUSES = ("pending", "done", "failed")
-KINDS = ("images", "labels", "exr", "depth", "meta", "coco", "mot")
+KINDS = (
+    "images",
+    "labels",
+    "exr",
+    "depth",
+    "meta",
+    "coco",
+    "mot",
+    "labels_visible",
+    "coco_visible",
+)
 """The folders of a dataset (docs/dataset-format.md)."""
+LEVEL_KINDS = ("images", "labels", "exr", "labels_visible")
+"""The folders that hold one folder per level."""
 STRAY_SUFFIXES = (".png", ".jpg", ".jpeg", ".txt")
 """Files in a level folder that the COCO writer reads: one that is not the dataset's would
 break it at the end of the batch, so it is refused at the start."""
@@ -320,7 +332,7 @@ def _own_folders(root: Path) -> list[Path]:
         if not base.is_dir() or base.is_symlink():
             continue
         folders.append(base)
-        if kind in ("images", "labels", "exr"):
+        if kind in LEVEL_KINDS:
             folders += [p for p in base.iterdir() if is_level_name(p.name) and p.is_dir()]
         elif kind == "mot":  # mot/<level>/<sequence>/ and its gt/
             for level in (p for p in base.iterdir() if is_level_name(p.name) and p.is_dir()):
@@ -346,10 +358,12 @@ def prune(root: Path, old: dict[str, Any], keep_scenes: set[str], keep_levels: s
                     layout.image(level, scene),
                     layout.label(level, scene),
                     layout.exr(level, scene),
+                    layout.visible_label(level, scene),
                 ]
         if scene not in keep_scenes:
             doomed += [layout.meta(scene), layout.depth(scene)]
     doomed += [layout.coco(level) for level in levels if level not in keep_levels]
+    doomed += [layout.coco_visible(level) for level in levels if level not in keep_levels]
     removed = 0
     inside = root.resolve()
     for path in doomed:
@@ -360,31 +374,39 @@ def prune(root: Path, old: dict[str, Any], keep_scenes: set[str], keep_levels: s
             removed += 1
     for level in levels:
         if level not in keep_levels:
-            for kind in ("images", "labels", "exr"):
+            for kind in LEVEL_KINDS:
                 with contextlib.suppress(OSError):
                     (root / kind / level).rmdir()  # only when empty
     return removed
 
 
 def scene_file_problem(
-    layout: Layout, scene: str, levels: list[str], exr: bool, size: tuple[int, int]
+    layout: Layout,
+    scene: str,
+    levels: list[str],
+    exr: bool,
+    size: tuple[int, int],
+    visible: bool = False,
 ) -> str | None:
     """The first missing, truncated or unreadable file of a finished scene (None: all are
-    intact). Cheap: headers and file ends only (:mod:`seahaze.fileio`)."""
-    for path in layout.scene_files(scene, levels, exr):
+    intact); ``visible``: the scene writes visible-object labels too. Cheap: headers and file
+    ends only (:mod:`seahaze.fileio`)."""
+    for path in layout.scene_files(scene, levels, exr, visible):
         problem = file_problem(path, scene, size)
         if problem is not None:
             return f"{path.relative_to(layout.root)} {problem}"
     return None
 
 
-def scene_digest(layout: Layout, scene: str, levels: list[str], exr: bool) -> str:
+def scene_digest(
+    layout: Layout, scene: str, levels: list[str], exr: bool, visible: bool = False
+) -> str:
     """The SHA-256 of every file of a scene (:meth:`Layout.scene_files`), each named by its
     path relative to the dataset: what the manifest's ``files_sha256`` records when the scene
     is written and what resume compares before keeping it. Raises OSError for a file that
     cannot be read."""
     combined = hashlib.sha256()
-    for path in layout.scene_files(scene, levels, exr):
+    for path in layout.scene_files(scene, levels, exr, visible):
         with open(path, "rb") as handle:
             content = hashlib.file_digest(handle, "sha256").hexdigest()
         combined.update(f"{path.relative_to(layout.root).as_posix()}\0{content}\n".encode())
@@ -411,7 +433,7 @@ def file_problem(path: Path, scene: str, size: tuple[int, int]) -> str | None:
         return fileio.check_exr(path, size, {"R", "G", "B"})
     if kind == "depth":
         return fileio.check_exr(path, size, {"Z"})
-    if kind == "labels":
+    if kind in ("labels", "labels_visible"):
         return check_label(path)
     return fileio.check_json(path)
 

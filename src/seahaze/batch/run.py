@@ -177,7 +177,8 @@ class SceneLedger:
     def digest_of(self, job: SceneJob) -> str:
         """The content hash of ``job``'s files as they are now (OSError when unreadable)."""
         levels = [level_name(v) for v in job.spec.haze.levels]
-        return scene_digest(self.layout, job.name, levels, job.spec.render.write_exr)
+        visible = job.spec.labels.write_visible
+        return scene_digest(self.layout, job.name, levels, job.spec.render.write_exr, visible)
 
 
 def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) -> SceneLedger:
@@ -242,6 +243,7 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
         sequences = {job.sequence for job in plan.jobs if job.sequence is not None}
         for level in [CLEAN_LEVEL, *level_names]:
             ledger.layout.coco(level).unlink(missing_ok=True)
+            ledger.layout.coco_visible(level).unlink(missing_ok=True)
             for seq in sorted(sequences):
                 ledger.layout.mot_gt(level, seq).unlink(missing_ok=True)
                 ledger.layout.mot_seqinfo(level, seq).unlink(missing_ok=True)
@@ -292,7 +294,8 @@ def _refuse_strays_and_blocked(
             )
     for job in plan.jobs:
         levels_of_job = [level_name(v) for v in job.spec.haze.levels]
-        for path in ledger.layout.scene_files(job.name, levels_of_job, job.spec.render.write_exr):
+        exr, visible = job.spec.render.write_exr, job.spec.labels.write_visible
+        for path in ledger.layout.scene_files(job.name, levels_of_job, exr, visible):
             if path.exists() and not path.is_file():
                 raise ForeignFolderError(
                     f"{path} is not a file, but seahaze writes one there: move it out of the "
@@ -354,7 +357,8 @@ def _mark_done_scenes(
             continue
         levels = [level_name(v) for v in job.spec.haze.levels]
         exr, size = job.spec.render.write_exr, job.spec.camera.resolution
-        problem = scene_file_problem(ledger.layout, job.name, levels, exr, size)
+        visible = job.spec.labels.write_visible
+        problem = scene_file_problem(ledger.layout, job.name, levels, exr, size, visible)
         if problem is None:
             problem, digest = _content_problem(ledger, job, old)
         if problem is None:
