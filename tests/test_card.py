@@ -105,4 +105,5 @@ def test_a_folder_or_a_broken_link_named_readme_is_left_alone(split_dataset, tmp
 def test_a_dataset_without_split_has_a_card_with_one_split(dataset):
     card = _card(dataset)
     assert "| | `all` | total |" in card
-    assert "splits: none (made without `--split`)" in card
+    assert "splits: none (made with `--split none`" in card
+    assert "--split none" in card  # the command that makes it again, in a new folder too

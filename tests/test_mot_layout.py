@@ -163,3 +163,24 @@ def test_motmetrics_motchallenge_app_reads_a_level_folder_untouched(
     row = dict(zip(header, table[1].split()[1:], strict=True))
     assert table[1].split()[0] == SEQUENCE
     assert row["MOTA"] == "100.0%" and row["FP"] == "0" and row["FN"] == "0"
+
+
+def test_force_for_fewer_levels_removes_the_dropped_levels_mot_folders(rendered, tmp_path):
+    """``--force`` without v1000 deletes ``mot/v1000/`` — seqinfo, gt, the frame links (not
+    the frames they point to), seqmap — and keeps a file there that seahaze did not write."""
+    import shutil
+
+    out = tmp_path / "ds"
+    shutil.copytree(rendered, out, symlinks=True)
+    scene = tmp_path / "tinyseq.yaml"
+    scene.write_text(TINY)
+    mine = out / "mot" / "v1000" / "notes.txt"
+    mine.write_text("mine")
+    frames = {p: p.read_bytes() for p in (out / "images" / "clean").iterdir()}
+    code = main(["render", str(scene), "--out", str(out), "--vis", "2000", "--force", "--quiet"])
+    assert code == 0
+    assert sorted(p.relative_to(out).as_posix() for p in (out / "mot" / "v1000").rglob("*")) == [
+        "mot/v1000/notes.txt"
+    ]
+    assert (out / "mot" / "v2000" / "tinyseq" / "seqinfo.ini").is_file()
+    assert {p: p.read_bytes() for p in (out / "images" / "clean").iterdir()} == frames

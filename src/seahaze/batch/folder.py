@@ -345,7 +345,8 @@ def prune(root: Path, old: dict[str, Any], keep_scenes: set[str], keep_levels: s
     """Under ``force``: delete the files of scenes and levels the new config no longer has.
 
     Only files the old manifest lists are candidates — its scenes × its levels (``clean``
-    included), their meta and depth, and its levels' COCO files — so a file seahaze did not
+    included), their meta and depth, its levels' COCO files and its sequences' MOTChallenge
+    files at those levels — so a file seahaze did not
     write is never deleted; a candidate whose folder resolves outside ``root`` (a level folder
     replaced by a symbolic link) is left alone too. Level folders left empty are removed."""
     layout = Layout(root)
@@ -364,6 +365,7 @@ def prune(root: Path, old: dict[str, Any], keep_scenes: set[str], keep_levels: s
             doomed += [layout.meta(scene), layout.depth(scene)]
     doomed += [layout.coco(level) for level in levels if level not in keep_levels]
     doomed += [layout.coco_visible(level) for level in levels if level not in keep_levels]
+    mot = _mot_files(layout, old, [level for level in levels if level not in keep_levels])
     removed = 0
     inside = root.resolve()
     for path in doomed:
@@ -372,12 +374,50 @@ def prune(root: Path, old: dict[str, Any], keep_scenes: set[str], keep_levels: s
         if path.is_file() and not path.is_symlink():
             path.unlink()
             removed += 1
+    for path in mot:  # img1/ holds links seahaze made: a link is removed, never followed
+        if path.parent.resolve().is_relative_to(inside) and (path.is_symlink() or path.is_file()):
+            path.unlink()
+            removed += 1
+    for level in levels:
+        if level not in keep_levels:
+            _remove_empty_tree(root / "mot" / level)
     for level in levels:
         if level not in keep_levels:
             for kind in LEVEL_KINDS:
                 with contextlib.suppress(OSError):
                     (root / kind / level).rmdir()  # only when empty
     return removed
+
+
+def _mot_files(layout: Layout, old: dict[str, Any], levels: list[str]) -> list[Path]:
+    """The MOTChallenge files seahaze wrote at ``levels`` for the old manifest's sequences:
+    each sequence's ``seqinfo.ini``, ``gt/gt.txt`` and ``img1/`` frame links, and the levels'
+    ``seqmap.txt``."""
+    frames: dict[str, int] = {}
+    for entry in (old.get("scenes") or {}).values():
+        sequence = entry.get("sequence") if isinstance(entry, dict) else None
+        if isinstance(sequence, str) and _is_plain_name(sequence):
+            frames[sequence] = frames.get(sequence, 0) + 1
+    files: list[Path] = []
+    for level in levels:
+        files.append(layout.mot_seqmap(level))
+        for sequence, count in frames.items():
+            files += [layout.mot_seqinfo(level, sequence), layout.mot_gt(level, sequence)]
+            files += [layout.mot_frame(level, sequence, k) for k in range(1, count + 1)]
+    return files
+
+
+def _remove_empty_tree(folder: Path) -> None:
+    """Remove ``folder`` and the folders under it, deepest first, where they are empty (a
+    file seahaze did not write keeps its folders)."""
+    if not folder.is_dir() or folder.is_symlink():
+        return
+    for path in sorted(folder.rglob("*"), key=lambda p: len(p.parts), reverse=True):
+        if path.is_dir() and not path.is_symlink():
+            with contextlib.suppress(OSError):
+                path.rmdir()
+    with contextlib.suppress(OSError):
+        folder.rmdir()
 
 
 def scene_file_problem(

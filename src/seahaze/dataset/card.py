@@ -75,6 +75,8 @@ def equivalent_command(data: dict[str, Any]) -> str:
     split = config.get("split")
     if split:
         parts.append("--split " + ",".join(f"{split[name]:g}" for name in SPLIT_NAMES))
+    else:  # a new folder gets the default split: say that this one had none
+        parts.append("--split none")
     return " ".join(parts)
 
 
@@ -159,7 +161,8 @@ def _provenance(data: dict[str, Any]) -> str:
         + "; scene-disjoint, each scene's from a SHA-256 of (master seed, scene name), so a"
         " scene keeps its split when the batch grows"
         if split
-        else "none (made without `--split`): `train` and `val` of `data.yaml` are every"
+        else "none (made with `--split none`, or before splits were the default): `train` and"
+        " `val` of `data.yaml` are every"
         " clean image; exports call the one split `all`"
     )
     return f"""## How it was made
