@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from ..dataset.splits import DEFAULT_SPLIT_SOURCE
 from ..spec import RENDER_MODES
 from . import limits
 from .common import DEFAULT_SCENE, UsageError, load_scenes, parse_res, parse_vis
@@ -146,7 +147,8 @@ def _warn_below_validated_range(plan: Any) -> None:
 
 def _say_split(plan: Any, source: str, quiet: bool) -> None:
     """The split the batch uses, in one line: a warning (shown with --quiet too) when the batch
-    is too small for it, else a note."""
+    is too small for a split the user asked for, else a note. A batch too small for the
+    default split (one scene: the quickstart's render) gets the note only: nobody asked."""
     if plan.assignment is None:
         if not quiet:
             print(
@@ -156,8 +158,10 @@ def _say_split(plan: Any, source: str, quiet: bool) -> None:
             )
         return
     warning = plan.assignment.warning()
-    if warning is not None:
+    if warning is not None and (source != DEFAULT_SPLIT_SOURCE or len(plan.jobs) > 1):
         print(f"seahaze: warning: split ({source}): {warning}", file=sys.stderr)
+    elif warning is not None and not quiet:
+        print(f"[seahaze] split ({source}): {warning}", file=sys.stderr)
     elif not quiet:
         print(f"[seahaze] split ({source}): {plan.assignment.describe()}", file=sys.stderr)
 

@@ -36,6 +36,9 @@ ALL_SCENES = "all"
 
 DEFAULT_SPLIT = "0.8,0.1,0.1"
 """The split of ``seahaze render`` in a new folder without ``--split`` (train, val, test)."""
+DEFAULT_SPLIT_SOURCE = "the default"
+"""How :func:`resolve_split` names a split nobody asked for (neither ``--split`` nor a
+folder's record)."""
 
 NO_SPLIT = "none"
 """``--split none``: no split; ``train`` and ``val`` of ``data.yaml`` are every clean image."""
@@ -244,7 +247,7 @@ def resolve_split(
             return SplitFractions.from_config(recorded), "kept from the folder's dataset.json"
         except (SplitError, KeyError, TypeError, ValueError):
             pass  # a damaged record: the default, and the config check names the difference
-    return SplitFractions.parse(DEFAULT_SPLIT), "the default"
+    return SplitFractions.parse(DEFAULT_SPLIT), DEFAULT_SPLIT_SOURCE
 
 
 def scene_unit(master_seed: int, scene: str) -> float:
