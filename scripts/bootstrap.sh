@@ -27,6 +27,6 @@ if [ ! -x .venv/bin/python ]; then
 fi
 echo "[bootstrap] installing seahaze and test tools into .venv"
 .venv/bin/python -m pip install -q --disable-pip-version-check --upgrade pip
-# The video extra too: the MP4 preview tests run (they are skipped without it).
-.venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test,video]'
+# The video and mot extras too: the MP4 preview and py-motmetrics tests run (skipped without).
+.venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test,video,mot]'
 touch .venv/.seahaze-installed
