@@ -233,6 +233,21 @@ def _check_exr(handle: Any, length: int, size: tuple[int, int], channels: set[st
     return None
 
 
+def json_depth(data: Any, limit: int) -> int:
+    """Nesting depth of a parsed JSON document (a scalar is 1), without recursion, so a
+    hostile file cannot exhaust the stack; the walk stops once ``limit`` is passed (the result
+    is then ``limit + 1``)."""
+    deepest, stack = 0, [(data, 1)]
+    while stack and deepest <= limit:
+        item, depth = stack.pop()
+        deepest = max(deepest, depth)
+        if isinstance(item, dict):
+            stack += [(v, depth + 1) for v in item.values()]
+        elif isinstance(item, list):
+            stack += [(v, depth + 1) for v in item]
+    return min(deepest, limit + 1)
+
+
 def check_json(path: Path) -> str | None:
     """Whether ``path`` holds a JSON object (the meta files; at most a few kB)."""
     try:

@@ -150,24 +150,9 @@ def _load_json(path: Path) -> tuple[Any, str | None]:
         return None, "nested too deeply"
     except (UnicodeDecodeError, ValueError) as err:
         return None, f"not valid JSON: {str(err).splitlines()[0] if str(err) else err}"
-    if _depth(data) > MAX_MANIFEST_DEPTH:
+    if fileio.json_depth(data, MAX_MANIFEST_DEPTH) > MAX_MANIFEST_DEPTH:
         return None, "nested too deeply"
     return data, None
-
-
-def _depth(data: Any) -> int:
-    """Nesting depth of a JSON document, without recursion."""
-    deepest, stack = 0, [(data, 1)]
-    while stack:
-        item, depth = stack.pop()
-        deepest = max(deepest, depth)
-        if depth > MAX_MANIFEST_DEPTH:
-            break
-        if isinstance(item, dict):
-            stack += [(v, depth + 1) for v in item.values()]
-        elif isinstance(item, list):
-            stack += [(v, depth + 1) for v in item]
-    return deepest
 
 
 def _is_plain_name(name: Any) -> bool:

@@ -12,6 +12,7 @@ from typing import Any
 
 from ..dataset import FORMAT_VERSION, Layout
 from ..dataset.splits import SPLIT_NAMES, scene_splits, split_order
+from ..fileio import json_depth
 from ..visibility import CLEAN_LEVEL, is_level_name
 
 MAX_MANIFEST_BYTES = 1 << 30
@@ -135,24 +136,11 @@ def _load_json(path: Path) -> Any:
         # ValueError: invalid JSON, or an integer of more than 4300 digits.
         reason = str(err).splitlines()[0] if str(err) else type(err).__name__
         raise ExportError(f"{path}: cannot read the manifest (not valid JSON: {reason})") from None
-    if _depth(data) > MAX_MANIFEST_DEPTH:
+    if json_depth(data, MAX_MANIFEST_DEPTH) > MAX_MANIFEST_DEPTH:
         raise ExportError(
             f"{path}: nested deeper than {MAX_MANIFEST_DEPTH}; not a seahaze manifest"
         )
     return data
-
-
-def _depth(data: Any) -> int:
-    """Nesting depth of a JSON document, without recursion (stops past the limit)."""
-    deepest, stack = 0, [(data, 1)]
-    while stack and deepest <= MAX_MANIFEST_DEPTH:
-        item, depth = stack.pop()
-        deepest = max(deepest, depth)
-        if isinstance(item, dict):
-            stack += [(v, depth + 1) for v in item.values()]
-        elif isinstance(item, list):
-            stack += [(v, depth + 1) for v in item]
-    return deepest
 
 
 def _shape_problem(data: dict[str, Any]) -> str | None:

@@ -34,6 +34,7 @@ from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
+from seahaze.fileio import json_depth
 from seahaze.metric.errors import MetricInputError, located
 from seahaze.visibility import REGULATION_CLASSES, RegulationClass, regulation_class
 
@@ -487,7 +488,7 @@ def _table_from_json(path: Path, text: str) -> CalibrationTable:
         raise located(path, f"JSON nested deeper than {MAX_TABLE_DEPTH}; not a table") from None
     except ValueError as exc:  # an integer of more than 4300 digits
         raise located(path, f"not a usable JSON table ({str(exc).splitlines()[0]})") from None
-    if _depth(doc) > MAX_TABLE_DEPTH:
+    if json_depth(doc, MAX_TABLE_DEPTH) > MAX_TABLE_DEPTH:
         raise located(path, f"JSON nested deeper than {MAX_TABLE_DEPTH}; not a table")
     if not isinstance(doc, dict) or not isinstance(doc.get("levels"), list):
         raise located(
@@ -523,19 +524,6 @@ def _table_from_json(path: Path, text: str) -> CalibrationTable:
         dataset=_opt_str(doc.get("dataset")),
         extra=extra,
     )
-
-
-def _depth(doc: object) -> int:
-    """Nesting depth of a JSON document, without recursion (stops past the limit)."""
-    deepest, stack = 0, [(doc, 1)]
-    while stack and deepest <= MAX_TABLE_DEPTH:
-        item, depth = stack.pop()
-        deepest = max(deepest, depth)
-        if isinstance(item, dict):
-            stack += [(v, depth + 1) for v in item.values()]
-        elif isinstance(item, list):
-            stack += [(v, depth + 1) for v in item]
-    return deepest
 
 
 def _opt_str(value: object) -> str | None:
