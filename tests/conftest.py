@@ -3,6 +3,12 @@ vessel library and every expected value can be computed analytically."""
 
 from __future__ import annotations
 
+import contextlib
+import io
+import signal
+import time
+from collections.abc import Iterator
+
 import numpy as np
 import pytest
 
@@ -53,8 +59,9 @@ class SkyAndSea:
         loaded = loaded or self.scenes[mode]
         renderer = LevelRenderer(mode, loaded, self.geo, self.clean, spec.haze, spec.render)
         images = [
-            renderer.render(self.sigma, 0, spec.render.model_copy(update={"spp": spp, "seed": s}))
-            .radiance
+            renderer.render(
+                self.sigma, 0, spec.render.model_copy(update={"spp": spp, "seed": s})
+            ).radiance
             for s in range(4)
         ]
         return region_stats(images, self.sky, self.sea)
@@ -200,3 +207,40 @@ def split_dataset(split_template, tmp_path_factory):
     args = ["render", str(split_template), "--scenes", str(SPLIT_SCENES), "--split"]
     assert main([*args, SPLIT_FRACTIONS, "--out", str(out), "--quiet"]) == 0
     return out
+
+
+CASE_SECONDS = 10
+"""How long one hostile-input case may run in this process before it fails as a hang."""
+
+
+@contextlib.contextmanager
+def deadline(seconds: int = CASE_SECONDS) -> Iterator[None]:
+    """Fail (instead of hanging the suite) when a case runs longer than ``seconds``."""
+
+    def expired(_signum, _frame):
+        raise TimeoutError(f"case ran longer than {seconds} s")
+
+    previous = signal.signal(signal.SIGALRM, expired)
+    signal.alarm(seconds)
+    start = time.perf_counter()
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    assert time.perf_counter() - start < seconds
+
+
+def cli_run(args: list[str], seconds: int = CASE_SECONDS) -> tuple[int, str, str]:
+    """``seahaze ARGS`` in this process within ``seconds``: exit code (argparse's SystemExit
+    too), stdout, stderr. Any other exception is a traceback the user would see: it fails the
+    test."""
+    from seahaze.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with deadline(seconds), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(args)
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else 2
+    return code, out.getvalue(), err.getvalue()

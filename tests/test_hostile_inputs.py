@@ -8,55 +8,23 @@ and the flags are made here. Damaged dataset folders are in ``tests/test_damaged
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import os
-import signal
-import time
 from pathlib import Path
 
 import pytest
 
-from seahaze.cli import main
+from conftest import cli_run
 
 ROOT = Path(__file__).resolve().parents[1]
 CORPUS = ROOT / "tests" / "data" / "hostile" / "scenes"
 SCENE_FILES = sorted(p for p in CORPUS.iterdir() if p.suffix == ".yaml")
 TINY = ROOT / "tests" / "data" / "hostile" / "tiny.yaml"
-CASE_SECONDS = 10
-
-
-@contextlib.contextmanager
-def deadline(seconds: int = CASE_SECONDS):
-    """Fail (instead of hanging the suite) when a case runs longer than ``seconds``."""
-
-    def expired(_signum, _frame):
-        raise TimeoutError(f"case ran longer than {seconds} s")
-
-    previous = signal.signal(signal.SIGALRM, expired)
-    signal.alarm(seconds)
-    start = time.perf_counter()
-    try:
-        yield
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, previous)
-    assert time.perf_counter() - start < seconds
 
 
 def run(args: list[str]) -> tuple[int, str, str]:
-    """``seahaze ARGS`` in this process: exit code (argparse's SystemExit too), stdout, stderr.
-
-    Any exception other than SystemExit is a traceback the user would see: it fails the test.
-    """
-    out, err = io.StringIO(), io.StringIO()
-    with deadline(), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            code = main(args)
-        except SystemExit as exc:
-            code = exc.code if isinstance(exc.code, int) else 2
-    return code, out.getvalue(), err.getvalue()
+    """``seahaze ARGS`` in this process within the case deadline (:func:`conftest.cli_run`)."""
+    return cli_run(args)
 
 
 def assert_refused(code: int, err: str) -> None:

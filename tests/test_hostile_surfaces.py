@@ -37,21 +37,17 @@ four scenes, two levels, three splits) and checked to export cleanly in every la
 
 from __future__ import annotations
 
-import contextlib
 import importlib.util
-import io
 import json
 import os
 import re
 import shutil
-import signal
-import time
 from pathlib import Path
 
 import pytest
 from PIL import Image
 
-from seahaze.cli import main
+from conftest import cli_run
 from seahaze.dataset.manifest import data_yaml_text, level_entries, manifest
 from seahaze.dataset.owned import STATE_ENV
 from seahaze.sceneio import parse_scene_text
@@ -59,7 +55,6 @@ from seahaze.spec import OverrideError, with_overrides
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ROOT / "tests" / "data" / "hostile" / "tiny.yaml"
-CASE_SECONDS = 10
 HAS_ULTRALYTICS = importlib.util.find_spec("ultralytics") is not None
 
 
@@ -67,34 +62,9 @@ HAS_ULTRALYTICS = importlib.util.find_spec("ultralytics") is not None
 # Running a case
 
 
-@contextlib.contextmanager
-def deadline(seconds: int = CASE_SECONDS):
-    """Fail (instead of hanging the suite) when a case runs longer than ``seconds``."""
-
-    def expired(_signum, _frame):
-        raise TimeoutError(f"case ran longer than {seconds} s")
-
-    previous = signal.signal(signal.SIGALRM, expired)
-    signal.alarm(seconds)
-    start = time.perf_counter()
-    try:
-        yield
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, previous)
-    assert time.perf_counter() - start < seconds
-
-
 def run(args: list[str]) -> tuple[int, str, str]:
-    """``seahaze ARGS`` in this process: exit code (argparse's SystemExit too), stdout, stderr.
-    Any other exception is a traceback the user would see: it fails the test."""
-    out, err = io.StringIO(), io.StringIO()
-    with deadline(), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            code = main(args)
-        except SystemExit as exc:
-            code = exc.code if isinstance(exc.code, int) else 2
-    return code, out.getvalue(), err.getvalue()
+    """``seahaze ARGS`` in this process within the case deadline (:func:`conftest.cli_run`)."""
+    return cli_run(args)
 
 
 def snapshot(*roots: Path) -> dict[str, tuple[str, int, int]]:
