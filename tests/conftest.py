@@ -244,3 +244,22 @@ def cli_run(args: list[str], seconds: int = CASE_SECONDS) -> tuple[int, str, str
         except SystemExit as exc:
             code = exc.code if isinstance(exc.code, int) else 2
     return code, out.getvalue(), err.getvalue()
+
+
+TINY_SEQUENCE = """\
+name: tinyseq
+camera: {height_m: 12, pitch_deg: -2, fov_deg: 40, resolution: [64, 36]}
+sun: {elevation_deg: 30, azimuth_deg: 140}
+sea: {quality: low, seed: 99, wind_speed: 8}
+vessels:
+  follow_slope: true
+  placed:
+    - {class: passenger_ferry, distance_m: 260, bearing_deg: 3, heading_deg: 175, length_m: 60,
+       speed_kn: 20}
+    - {class: tug, distance_m: 150, bearing_deg: -10, heading_deg: 60, length_m: 25,
+       speed_kn: 10, turn_rate_deg_s: 2}
+haze: {levels: [1000]}
+sequence: {frames: 3, fps: 2}
+render: {spp: 1, seed: 3}
+"""
+"""A 3-frame sequence of two moving vessels at 64×36, 1 spp: the sequence tests' scene."""

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import TINY_SEQUENCE
 from seahaze.cli import main
 from seahaze.dataset.tracks import place_frame
 
@@ -25,22 +26,7 @@ SEQUENCE = "tinyseq"
 LEVELS = ("clean", "v1000")
 FRAMES = 3
 
-TINY = """\
-name: tinyseq
-camera: {height_m: 12, pitch_deg: -2, fov_deg: 40, resolution: [32, 18]}
-sun: {elevation_deg: 30, azimuth_deg: 140}
-sea: {quality: low, seed: 99, wind_speed: 8}
-vessels:
-  follow_slope: true
-  placed:
-    - {class: passenger_ferry, distance_m: 260, bearing_deg: 3, heading_deg: 175, length_m: 60,
-       speed_kn: 20}
-    - {class: tug, distance_m: 150, bearing_deg: -10, heading_deg: 60, length_m: 25,
-       speed_kn: 10, turn_rate_deg_s: 2}
-haze: {levels: [1000]}
-sequence: {frames: 3, fps: 2}
-render: {spp: 1, seed: 3}
-"""
+TINY = TINY_SEQUENCE.replace("resolution: [64, 36]", "resolution: [32, 18]")
 
 
 @pytest.fixture(scope="module")
