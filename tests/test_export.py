@@ -227,6 +227,35 @@ def test_yolo_layout_is_one_standard_dataset_per_level(split_dataset, splits, tm
                 )
 
 
+def test_yolo_hazy_layout_trains_on_every_level_scene_disjoint(split_dataset, splits, tmp_path):
+    """One Ultralytics dataset over the clean image and the levels: each scene's images, all
+    levels, in its own split (train and val share no scene), each with its level's labels."""
+    out = tmp_path / "hazy"
+    assert _export(split_dataset, out, "yolo-hazy", "--levels", LEVELS[0]) == 0
+    data = yaml.safe_load((out / "data.yaml").read_text())
+    assert "path" not in data and data["names"][0] == "container_ship"
+    assert {k: data[k] for k in ("train", "val", "test")} == {
+        s: f"images/{s}" for s in ("train", "val", "test")
+    }
+    scenes_in = {}
+    for split, scenes in splits.items():
+        names = sorted(p.stem for p in (out / "images" / split).iterdir())
+        assert names == sorted(f"{s}_{lv}" for s in scenes for lv in ("clean", LEVELS[0]))
+        scenes_in[split] = {name.rsplit("_", 1)[0] for name in names}
+        for scene in scenes:
+            for level in ("clean", LEVELS[0]):
+                label = out / "labels" / split / f"{scene}_{level}.txt"
+                assert (
+                    label.read_bytes()
+                    == (split_dataset / "labels" / level / f"{scene}.txt").read_bytes()
+                )
+                assert os.path.samefile(
+                    out / "images" / split / f"{scene}_{level}.png",
+                    split_dataset / "images" / level / f"{scene}.png",
+                )
+    assert not scenes_in["train"] & scenes_in["val"] and not scenes_in["train"] & scenes_in["test"]
+
+
 # --------------------------------------------------------------------------------------------
 # Links, refusals and ownership
 

@@ -17,7 +17,7 @@ Cases per surface (``test_the_corpus_counts_match_this_docstring`` keeps them tr
 - meshes: 8 — empty file, NaN and inf vertices (also an unused one in a PLY, and one a PLY
   face uses, which trimesh's processed load drops with the face), zero extent, up axis equal
   to the forward axis (2)
-- export: 64 — every ``--layout`` on a half-finished dataset, ``--out`` inside or above the
+- export: 65 — every ``--layout`` on a half-finished dataset, ``--out`` inside or above the
   dataset or through a link into it, onto a file or under one, onto a foreign folder or a
   planted record, ``--levels``, unknown layout and link, missing images, damaged
   ``dataset.json`` (deep, scene entries that are not mappings, levels without a visibility,
@@ -50,6 +50,7 @@ from PIL import Image
 from conftest import cli_run
 from seahaze.dataset.manifest import data_yaml_text, level_entries, manifest
 from seahaze.dataset.owned import STATE_ENV
+from seahaze.export.layouts import LAYOUTS as EXPORT_LAYOUTS
 from seahaze.sceneio import parse_scene_text
 from seahaze.spec import OverrideError, with_overrides
 
@@ -415,7 +416,7 @@ def dataset_copy(source: Path, target: Path) -> Path:
 
 def test_the_hand_written_dataset_exports_in_every_layout(fake_dataset, tmp_path):
     """The control: the cases below fail for what they change, not for the fixture."""
-    for layout in ("paired", "same-name", "reside", "yolo"):
+    for layout in LAYOUTS:
         out_dir = tmp_path / layout
         code, out, err = run(
             ["export", str(fake_dataset), "--layout", layout, "--out", str(out_dir)]
@@ -426,7 +427,7 @@ def test_the_hand_written_dataset_exports_in_every_layout(fake_dataset, tmp_path
 # --------------------------------------------------------------------------------------------
 # export: flags and --out
 
-LAYOUTS = ["paired", "same-name", "reside", "yolo"]
+LAYOUTS = list(EXPORT_LAYOUTS)
 
 
 @pytest.mark.parametrize("layout", LAYOUTS)

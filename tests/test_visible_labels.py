@@ -325,3 +325,16 @@ def run_cli(args: list[str]) -> tuple[int, str, str]:
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = main([*args, "--quiet"])
     return code, out.getvalue(), err.getvalue()
+
+
+def test_the_hazy_training_export_takes_the_visible_labels(pair, tmp_path):
+    """``export --layout yolo-hazy`` of a dataset with visible-object labels trains on what
+    each level shows: the ship hidden at 300 m has no box in that image's label file."""
+    out = tmp_path / "view"
+    assert main(["export", str(pair), "--layout", "yolo-hazy", "--out", str(out)]) == 0
+    (split,) = [p.name for p in (out / "labels").iterdir()]
+    for level in LEVELS:
+        exported = out / "labels" / split / f"pair_{level}.txt"
+        assert exported.read_bytes() == (pair / "labels_visible" / level / "pair.txt").read_bytes()
+    assert len(box_lines(out / "labels" / split / "pair_v0300.txt")) == 1
+    assert "labels_visible/" in (out / "data.yaml").read_text()

@@ -78,7 +78,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="paired: <split>/hazy/<scene>_<level>.png + <split>/GT/<scene>.png + pairs.csv; "
         "same-name: GT/<scene>_<level>.png beside the hazy image of that name (DehazeFormer); "
         "reside: <split>/hazy/<id>_<level>.png + <split>/clear/<id>.png (RESIDE, FFA-Net); "
-        "yolo: <level>/data.yaml with images/<split>/ and labels/<split>/ (Ultralytics)",
+        "yolo: <level>/data.yaml with images/<split>/ and labels/<split>/ (Ultralytics); "
+        "yolo-hazy: one data.yaml over the clean image and every level of each scene, "
+        "images/<split>/<scene>_<level>.png with that level's labels (training on haze)",
     )
     parser.add_argument("--out", required=True, metavar="DIR", help="folder of the export")
     parser.add_argument(

@@ -13,6 +13,12 @@ which small text files (pair lists, dataset YAMLs) are written beside them.
   ``<level>/labels/<split>/<scene>.txt`` and ``<level>/data.yaml`` with the standard keys
   ``train``/``val``/``test`` and no ``path`` (Ultralytics then resolves against the YAML's own
   folder), so it works from any folder, in any YOLO tool, and after the view is moved.
+* ``yolo-hazy`` — one Ultralytics dataset for training a detector on haze: the clean image
+  and every exported level of each scene pooled in its scene's split,
+  ``images/<split>/<scene>_<level>.png`` with ``labels/<split>/<scene>_<level>.txt`` (the
+  visible-object labels of that level where the dataset has them, ``labels.write_visible``,
+  else the level's labels), and one ``data.yaml`` (scene-disjoint: every image of a scene is
+  in one split).
 """
 
 from __future__ import annotations
@@ -92,6 +98,26 @@ def plan_yolo(source: SourceDataset) -> ExportPlan:
     return plan
 
 
+def plan_yolo_hazy(source: SourceDataset) -> ExportPlan:
+    """The ``yolo-hazy`` layout: the clean image and the levels of each scene pooled in one
+    Ultralytics dataset, each image with its own level's labels (see the module docstring)."""
+    plan = ExportPlan()
+    layout = source.layout
+    levels = source.level_names(with_clean=True)
+    scenes = [scene for split in source.splits for scene in source.scenes_of(split)]
+    visible = all(layout.visible_label(lv, sc).is_file() for lv in levels for sc in scenes)
+    label = layout.visible_label if visible else layout.label
+    for split in source.splits:
+        for scene in source.scenes_of(split):
+            for level in levels:
+                name = f"{scene}_{level}"
+                plan.placed[f"images/{split}/{name}.png"] = layout.image(level, scene)
+                plan.placed[f"labels/{split}/{name}.txt"] = label(level, scene)
+    which = "labels_visible/ (the vessels seen at each level)" if visible else "labels/"
+    plan.texts["data.yaml"] = _view_yaml(source, f"clean and {', '.join(levels[1:])}; {which}")
+    return plan
+
+
 def _view_yaml(source: SourceDataset, level: str) -> str:
     present = [split for split in source.splits if source.scenes_of(split)]
     keys = {"train": present[0], "val": present[0]} if present == ["all"] else {}
@@ -112,6 +138,7 @@ LAYOUTS: dict[str, Callable[[SourceDataset], ExportPlan]] = {
     "same-name": plan_same_name,
     "reside": plan_reside,
     "yolo": plan_yolo,
+    "yolo-hazy": plan_yolo_hazy,
 }
 """``--layout`` name → its planner."""
 

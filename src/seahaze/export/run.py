@@ -79,7 +79,7 @@ def export_dataset(
         out,
         layout,
         source.splits,
-        tuple(source.level_names(with_clean=layout == "yolo")),
+        tuple(source.level_names(with_clean=layout in ("yolo", "yolo-hazy"))),
         len(plan.placed),
         len(plan.texts),
         plan.pairs,
