@@ -191,6 +191,19 @@ def test_the_yolo_export_is_a_movable_standard_dataset(data, weights, env, tmp_p
     assert (images, instances) == (len(train), _instances(data, "v0500", train))
 
 
+def test_the_yolo_hazy_export_validates_every_level_of_a_split(data, weights, env, tmp_path):
+    """``--layout yolo-hazy``: Ultralytics reads one dataset holding every level of each
+    scene of the split, with each level's labels."""
+    view = tmp_path / "hazy"
+    run(env, tmp_path, "seahaze", "export", str(data), "--layout", "yolo-hazy", "--out", str(view))
+    manifest = json.loads((data / "dataset.json").read_text())
+    train = [n for n, e in manifest["scenes"].items() if e["split"] == "train"]
+    text = yolo_val(env, tmp_path, weights, "hazy/data.yaml", "train")
+    images, instances, _ = _val_row(text)
+    assert images == len(train) * len(LEVELS)
+    assert instances == sum(_instances(data, level, train) for level in LEVELS)
+
+
 def _boxes(folder: Path) -> dict[str, list[list[float]]]:
     return {
         p.stem: sorted([float(v) for v in line.split()] for line in p.read_text().splitlines())
