@@ -236,7 +236,7 @@ def open_ledger(plan: BatchPlan, root: Path, force: bool, reporter: Reporter) ->
             f"resuming: {ledger.done_before} of {len(plan.jobs)} scenes already done, "
             f"{pending} to render"
         )
-    write_split_files(ledger, existing, level_names, reporter)
+    write_split_files(ledger, existing, level_names)
     ledger.write_manifest()
     if pending:
         # COCO, track files and the card describe every scene: stale until the last is done.
@@ -307,10 +307,10 @@ def write_split_files(
     ledger: SceneLedger,
     existing: dict[str, Any] | None,
     level_names: list[str],
-    reporter: Reporter,
 ) -> None:
     """Write ``data.yaml`` and, with a split, each split's image list; delete the lists of
-    splits the folder's previous config had and this one has not."""
+    splits the folder's previous config had and this one has not. A split that got no scene
+    has share 0 in ``plan.split`` and no list (the plan's split line says so)."""
     layout, split = ledger.layout, ledger.plan.split
     fractions = split.as_dict() if split else {}
     names = [name for name in SPLIT_NAMES if fractions.get(name, 0) > 0]
@@ -321,12 +321,6 @@ def write_split_files(
             members[job.split].append(job.name)
     for name, scenes in members.items():
         write_text(layout.split_list(name), split_list_text(scenes))
-        if not scenes:
-            reporter.warn(
-                f"split '{name}' ({fractions[name]:g}) has none of the {len(ledger.plan.jobs)} "
-                f"scene(s): {layout.split_list(name).name} is empty; render more scenes or "
-                "change --split"
-            )
     before = ((existing or {}).get("config") or {}).get("split") or {}
     for name in SPLIT_NAMES:
         if before.get(name, 0) > 0 and name not in members:

@@ -116,9 +116,9 @@ class Estimate:
     scene_bytes: int
     """Peak memory of one scene (the largest)."""
     scenes: int
-    compile_seconds: float = 0.0
+    compile_seconds: float
     """Of :attr:`seconds`, those compiling kernels on first use."""
-    peak_bytes: int = 0
+    peak_bytes: int
     """Peak memory of the job: :attr:`scene_bytes` times the scenes rendered at once."""
 
     def describe(self) -> str:
@@ -129,7 +129,7 @@ class Estimate:
         )
         return (
             f"{self.scenes} scene(s), about {format_duration(self.seconds)}{compiling} on "
-            f"{cores()} core(s) and {max(self.peak_bytes, self.scene_bytes) / 2**30:.1f} GiB "
+            f"{cores()} core(s) and {self.peak_bytes / 2**30:.1f} GiB "
             "(cost model: docs/limits.md)"
         )
 
@@ -140,7 +140,7 @@ class Estimate:
             "seconds": round(self.seconds, 3),
             "compile_seconds": round(self.compile_seconds, 3),
             "scene_bytes": self.scene_bytes,
-            "peak_bytes": max(self.peak_bytes, self.scene_bytes),
+            "peak_bytes": self.peak_bytes,
         }
 
 
@@ -334,8 +334,8 @@ def estimate(
         s, p = scene_core_seconds(spec)
         serial, parallel = serial + count * s, parallel + count * p
     scenes = sum(count for _, count in jobs)
-    compiling = kernels.compile_seconds(spec for spec, count in jobs if count) if scenes else 0.0
-    seconds = (STARTUP_S + compiling if scenes else 0.0) + serial + parallel / max(cores(), 1)
+    compiling = kernels.compile_seconds(spec for spec, count in jobs if count)
+    seconds = (STARTUP_S if scenes else 0.0) + compiling + serial + parallel / max(cores(), 1)
     peak = max((scene_bytes(spec) for spec, _ in jobs), default=0)
     together = peak * max(min(at_once, scenes), 1)
     return Estimate(seconds, peak, scenes, compiling, together)
@@ -345,7 +345,7 @@ def confirmation_needed(job: Estimate, memory: int | None = None) -> str | None:
     """Why the job needs ``--yes`` (None: it does not) on a machine of ``memory`` bytes
     (None: this one)."""
     memory = total_memory() if memory is None else memory
-    needed = max(job.peak_bytes, job.scene_bytes)
+    needed = job.peak_bytes
     if memory and needed > CONFIRM_MEMORY_FRACTION * memory:
         one = needed == job.scene_bytes
         what, verb = ("one scene", "needs") if one else ("the scenes rendered at once", "need")
