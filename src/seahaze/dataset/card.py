@@ -83,15 +83,20 @@ def equivalent_command(data: dict[str, Any]) -> str:
 def card_text(data: dict[str, Any], counts: dict[str, SplitCounts]) -> str:
     """The Markdown of the card for manifest ``data`` and its label ``counts``."""
     sections = [
-        _header(data, counts),
-        _provenance(data),
-        _levels(data),
-        _counts(data, counts),
+        CARD_MARKER + "\n" + _summary(data, counts),
+        *description_sections(data, counts)[1:],
         _files(data),
         _loading(data),
-        _citation(),
+        citation_section(),
     ]
     return "\n".join(sections)
+
+
+def description_sections(data: dict[str, Any], counts: dict[str, SplitCounts]) -> list[str]:
+    """The sections that describe the set itself (what it is, how it was made, its levels and
+    counts), without the marker line: shared by this card and the Hugging Face card of
+    ``seahaze export --layout hf``, which adds its own files, loading and front-matter."""
+    return [_summary(data, counts), _provenance(data), _levels(data), _counts(data, counts)]
 
 
 def is_foreign(path: Path) -> bool:
@@ -127,14 +132,13 @@ def remove_card(root: Path) -> None:
 # Sections
 
 
-def _header(data: dict[str, Any], counts: dict[str, SplitCounts]) -> str:
+def _summary(data: dict[str, Any], counts: dict[str, SplitCounts]) -> str:
     scenes = len(data["scenes"])
     visibilities = [level["visibility_m"] for level in data["levels"]]
     images = scenes * (1 + len(visibilities))
     vessels = sum(sum(c.instances.values()) for c in counts.values())
     levels = ", ".join(f"{v:g}" for v in visibilities) + " m"
-    return f"""{CARD_MARKER}
-# seahaze maritime haze dataset
+    return f"""# seahaze maritime haze dataset
 
 Rendered maritime scenes, each as a haze-free image and as hazy images of a homogeneous haze
 with an exact visibility label V (σ = −ln ε / V, {_threshold(data)}).
@@ -285,7 +289,8 @@ seahaze metric newvis --table table.json --model WEIGHTS.pt --images DEHAZED/ --
 """
 
 
-def _citation() -> str:
+def citation_section() -> str:
+    """The card's *Citation* section: the MSVD paper, whose levels and metric the set follows."""
     return f"""## Citation
 
 The graded visibility levels, the regulation classes and the visibility metric follow the MSVD

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 import math
 import stat
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -46,6 +46,8 @@ class SourceDataset:
     """Scene → split (``train``, ``val``, ``test``; ``all`` without a split), in plan order."""
     splits: tuple[str, ...]
     classes: tuple[str, ...]
+    manifest: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+    """``dataset.json`` as read (its parts above checked; the ``hf`` card reads the rest)."""
 
     @property
     def root(self) -> Path:
@@ -79,11 +81,11 @@ def open_finished(root: Path, levels: list[str] | None = None) -> SourceDataset:
     stray = next(((name, split) for name, split in scenes.items() if split not in order), None)
     if stray is not None:
         raise ExportError(
-            f"{layout.manifest}: scene {stray[0]!r} has split {_short(stray[1])}; allowed: "
+            f"{layout.manifest}: scene {stray[0]!r} has split {value_text(stray[1])}; allowed: "
             f"{', '.join(order)} (it would be left out of the export)"
         )
     _check_finished(layout, data, [CLEAN_LEVEL, *(lv.name for lv in chosen)])
-    return SourceDataset(layout, tuple(chosen), scenes, order, tuple(data["classes"]))
+    return SourceDataset(layout, tuple(chosen), scenes, order, tuple(data["classes"]), data)
 
 
 def read_manifest(path: Path) -> dict[str, Any]:
@@ -98,7 +100,7 @@ def read_manifest(path: Path) -> dict[str, Any]:
     version = data.get("format_version")
     if isinstance(version, bool) or version != FORMAT_VERSION:  # true == 1 in Python
         raise ExportError(
-            f"{path}: format_version {_short(version)}; this seahaze reads {FORMAT_VERSION}"
+            f"{path}: format_version {value_text(version)}; this seahaze reads {FORMAT_VERSION}"
         )
     if not isinstance(data.get("scenes"), dict) or not data["scenes"]:
         raise ExportError(f"{path}: the manifest lists no scenes (scenes: a mapping of names)")
@@ -147,13 +149,13 @@ def _shape_problem(data: dict[str, Any]) -> str | None:
     """What in the parts an export reads does not have its type (None: all do)."""
     config = data.get("config")
     if not isinstance(config, dict):
-        return f"config is {_kind(config)}; allowed: a mapping"
+        return f"config is {kind_text(config)}; allowed: a mapping"
     split = config.get("split")
     if split is not None and not isinstance(split, dict):
-        return f"config.split is {_kind(split)}; allowed: a mapping of {', '.join(SPLIT_NAMES)}"
+        return f"config.split is {kind_text(split)}; allowed: a mapping of {', '.join(SPLIT_NAMES)}"
     levels = data.get("levels")
     if not isinstance(levels, list) or not levels:
-        what = "empty" if isinstance(levels, list) else _kind(levels)
+        what = "empty" if isinstance(levels, list) else kind_text(levels)
         return f"levels is {what}; allowed: a list of at least one hazy level"
     classes = data.get("classes")
     if not isinstance(classes, list) or not all(isinstance(c, str) and c for c in classes):
@@ -161,15 +163,17 @@ def _shape_problem(data: dict[str, Any]) -> str | None:
     for name, entry in data["scenes"].items():
         if not _is_plain_name(name):
             return (
-                f"scene name {_short(name)} is not a file name (no '/', '..' or control character)"
+                f"scene name {value_text(name)} is not a file name (no '/', '..' or control "
+                "character)"
             )
         if not isinstance(entry, dict):
-            return f"scenes.{name} is {_kind(entry)}; allowed: a mapping with status and split"
+            return f"scenes.{name} is {kind_text(entry)}; allowed: a mapping with status and split"
         if not isinstance(entry.get("status"), str):
-            return f"scenes.{name}.status is {_kind(entry.get('status'))}; allowed: done"
+            return f"scenes.{name}.status is {kind_text(entry.get('status'))}; allowed: done"
         if not isinstance(entry.get("split", ""), str | None):
             return (
-                f"scenes.{name}.split is {_kind(entry['split'])}; allowed: {', '.join(SPLIT_NAMES)}"
+                f"scenes.{name}.split is {kind_text(entry['split'])}; allowed: "
+                f"{', '.join(SPLIT_NAMES)}"
             )
     return None
 
@@ -181,7 +185,7 @@ def _levels(data: dict[str, Any], path: Path) -> list[Level]:
         where = f"{path}: levels[{i}]"
         if not isinstance(entry, dict):
             raise ExportError(
-                f"{where} is {_kind(entry)}; allowed: a mapping with name, "
+                f"{where} is {kind_text(entry)}; allowed: a mapping with name, "
                 "visibility_m and sigma_per_m"
             )
         name = entry.get("name")
@@ -191,7 +195,7 @@ def _levels(data: dict[str, Any], path: Path) -> list[Level]:
             or name == CLEAN_LEVEL
         ):
             raise ExportError(
-                f"{where}.name is {_short(name)}; allowed: a level folder name such as v0300"
+                f"{where}.name is {value_text(name)}; allowed: a level folder name such as v0300"
             )
         if any(level.name == name for level in known):
             raise ExportError(f"{where}.name {name} is listed twice; allowed: one entry per level")
@@ -202,12 +206,12 @@ def _levels(data: dict[str, Any], path: Path) -> list[Level]:
                 raise ExportError(f"{where}.{key} is missing; allowed: a finite number {low}")
             if not (isinstance(value, int | float) and not isinstance(value, bool)):
                 raise ExportError(
-                    f"{where}.{key} is {_short(value)}; allowed: a finite number {low}"
+                    f"{where}.{key} is {value_text(value)}; allowed: a finite number {low}"
                 )
             number = _finite(value)
             if number is None or number <= 0:
                 raise ExportError(
-                    f"{where}.{key} is {_short(value)}; allowed: a finite number {low}"
+                    f"{where}.{key} is {value_text(value)}; allowed: a finite number {low}"
                 )
             values.append(number)
         known.append(Level(name, values[0], values[1]))
@@ -235,7 +239,7 @@ def _is_plain_name(name: Any) -> bool:
     )
 
 
-def _kind(value: Any) -> str:
+def kind_text(value: Any) -> str:
     """``value``'s JSON kind in words, for messages."""
     kinds = {dict: "a mapping", list: "a list", str: "a string", bool: "true/false"}
     if value is None:
@@ -243,18 +247,18 @@ def _kind(value: Any) -> str:
     return next((text for kind, text in kinds.items() if isinstance(value, kind)), "a number")
 
 
-def _short(value: Any) -> str:
+def value_text(value: Any) -> str:
     """``value`` for a one-line message: a string or number as written, anything else by its
     kind (a repr of a huge or deep value would be a page long, or recurse)."""
     if isinstance(value, str):
         return repr(value[:40] + ("…" if len(value) > 40 else ""))
     if isinstance(value, bool) or value is None:
-        return _kind(value)
+        return kind_text(value)
     if isinstance(value, float):
         return f"{value:.6g}"
     if isinstance(value, int):
         return str(value) if abs(value) < 10**40 else "an integer of more than 40 digits"
-    return _kind(value)
+    return kind_text(value)
 
 
 def _select(known: list[Level], wanted: list[str] | None, manifest: Path) -> list[Level]:
