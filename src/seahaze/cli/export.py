@@ -34,7 +34,12 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     try:
         report = export_dataset(
-            Path(args.dataset), Path(args.out), args.layout, args.link, _levels(args.levels)
+            Path(args.dataset),
+            Path(args.out),
+            args.layout,
+            args.link,
+            _levels(args.levels),
+            args.license,
         )
     except ExportError as err:
         raise UsageError(str(err)) from None
@@ -49,10 +54,15 @@ def cmd_export(args: argparse.Namespace) -> int:
         print(f"seahaze: warning: {line}", file=sys.stderr)
     pairs = f", {report.pairs} hazy/clean pairs" if report.pairs else ""
     removed = f"; removed {report.removed} file(s) of an earlier export" if report.removed else ""
+    files = (
+        f"{report.built} {report.kind} file(s) ({report.built_bytes / 1e6:.1f} MB)"
+        if report.built
+        else f"{report.placed} dataset files ({report.methods})"
+    )
     print(
         f"exported {report.layout}: splits {', '.join(report.splits)}, levels "
-        f"{', '.join(report.levels)}{pairs} to {report.out}: {report.placed} dataset files "
-        f"({report.methods}), {report.texts} text file(s){removed}"
+        f"{', '.join(report.levels)}{pairs} to {report.out}: {files}, {report.texts} text "
+        f"file(s){removed}"
     )
     return 0
 
@@ -65,9 +75,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "export",
         help="a finished dataset in a dehazing or detection tool's folder layout (links)",
         description="Write a view of a finished dataset in another tool's folder layout: "
-        "paired hazy/clean images per split for dehazing code, or one Ultralytics dataset per "
-        "level. Dataset files are hard-linked (symbolic links or copies where that is "
-        "impossible); files in --out that seahaze did not write are never overwritten. "
+        "paired hazy/clean images per split for dehazing code, one Ultralytics dataset per "
+        "level, or a Hugging Face datasets folder of Parquet files. Dataset files are "
+        "hard-linked (symbolic links or copies where that is impossible); files in --out that "
+        "seahaze did not write are never overwritten. "
         "See docs/dataset-format.md#exports. Exit code 2: bad input or refused; 3: write error.",
     )
     parser.add_argument("dataset", metavar="DIR", help="a finished dataset of 'seahaze render'")
@@ -80,7 +91,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "reside: <split>/hazy/<id>_<level>.png + <split>/clear/<id>.png (RESIDE, FFA-Net); "
         "yolo: <level>/data.yaml with images/<split>/ and labels/<split>/ (Ultralytics); "
         "yolo-hazy: one data.yaml over the clean image and every level of each scene, "
-        "images/<split>/<scene>_<level>.png with that level's labels (training on haze)",
+        "images/<split>/<scene>_<level>.png with that level's labels (training on haze); "
+        "hf: data/<level>/<split>-*.parquet + README.md for Hugging Face datasets, one row per "
+        "scene and level with hazy, clean, depth, visibility, σ and vessels (needs "
+        "pip install 'seahaze[hf]')",
     )
     parser.add_argument("--out", required=True, metavar="DIR", help="folder of the export")
     parser.add_argument(
@@ -88,7 +102,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         choices=list(LINK_MODES),
         default="auto",
         help="how dataset files are placed: auto (hard link, else symbolic link, else copy; "
-        "the summary says which), hard, symlink or copy (default: auto)",
+        "the summary says which), hard, symlink or copy (default: auto); the hf layout copies "
+        "the pixels into its Parquet files and links nothing",
+    )
+    parser.add_argument(
+        "--license",
+        metavar="ID",
+        help="--layout hf only: the licence in its card's front-matter, a Hub identifier such "
+        "as cc-by-4.0 (default: other, and the card says none was chosen)",
     )
     parser.add_argument(
         "--levels",

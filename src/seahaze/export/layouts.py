@@ -26,30 +26,17 @@ from __future__ import annotations
 import csv
 import io
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from pathlib import Path
 
 import yaml
 
 from ..visibility import CLEAN_LEVEL
+from .hf import plan_hf
+from .plan import ExportPlan
 from .source import ExportError, SourceDataset
 
 PAIRS_CSV = "pairs.csv"
 PAIR_COLUMNS = ("hazy", "gt", "scene", "level", "visibility_m", "sigma_per_m", "split")
 """Columns of ``<split>/pairs.csv``: paths relative to the split folder, then the labels."""
-
-
-@dataclass
-class ExportPlan:
-    """Every file of an export: dataset files to place (target → source) and texts to write."""
-
-    placed: dict[str, Path] = field(default_factory=dict)
-    texts: dict[str, str] = field(default_factory=dict)
-    pairs: int = 0
-
-    def targets(self) -> list[str]:
-        """Every relative path the export writes."""
-        return [*self.placed, *self.texts]
 
 
 def plan_paired(source: SourceDataset) -> ExportPlan:
@@ -133,14 +120,16 @@ def _view_yaml(source: SourceDataset, level: str) -> str:
     )
 
 
-LAYOUTS: dict[str, Callable[[SourceDataset], ExportPlan]] = {
+LAYOUTS: dict[str, Callable[..., ExportPlan]] = {
     "paired": plan_paired,
     "same-name": plan_same_name,
     "reside": plan_reside,
     "yolo": plan_yolo,
     "yolo-hazy": plan_yolo_hazy,
+    "hf": plan_hf,
 }
-"""``--layout`` name → its planner."""
+"""``--layout`` name → its planner (each takes the :class:`SourceDataset`; ``hf`` also its
+card's ``license_id``)."""
 
 
 def _plan_pairs(
