@@ -7,13 +7,17 @@ their video, frame and track ids (:mod:`seahaze.dataset.tracks`).
 
 A dataset rendered with ``labels.write_visible`` also gets ``coco_visible/<level>.json`` from
 ``labels_visible/<level>/``: the vessels seen in each level's image (docs/metric.md), with the
-same image ids as ``coco/<level>.json``. Those carry no video or track fields.
+same image ids as ``coco/<level>.json``. A sequence's ``coco_visible`` carries the same video
+fields as its ``coco`` file (``videos``, each image's ``video_id`` and ``frame_id``, each
+annotation's ``track_id`` and ``instance_id``), so a video tool reads either file the same way.
 """
 
 from __future__ import annotations
 
+from collections import defaultdict
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 from ..dataset.layout import Layout
 from ..dataset.tracks import add_video_fields
@@ -37,6 +41,7 @@ def write_coco(root: Path) -> None:
         if layout.visible_label_dir(level).is_dir():
             seen, _ = build_coco(visible_truth(data, level, every), {}, data.names)
             _name_images(seen, level)
+            copy_video_fields(truth, seen, layout.visible_label_dir(level))
             write_json(layout.coco_visible(level), seen)
 
 
@@ -53,6 +58,52 @@ def visible_truth(data: Dataset, level: str, every: list[ImageTruth]) -> list[Im
         boxes = read_yolo_file(path, len(data.names), with_conf=False)
         out.append(replace(image, boxes=tuple(boxes)))
     return out
+
+
+VIDEO_IMAGE_KEYS = ("video_id", "frame_id")
+"""The video fields of a sequence frame's COCO image (``dataset.tracks.add_video_fields``)."""
+TRACK_KEYS = ("track_id", "instance_id")
+"""The track fields of a sequence frame's COCO annotation (``instance_id``: mmtracking's name)."""
+
+
+def copy_video_fields(every: dict[str, Any], seen: dict[str, Any], folder: Path) -> None:
+    """Give ``seen`` (a level's ``coco_visible`` truth) the video fields of ``every`` (its
+    ``coco`` truth, after :func:`~seahaze.dataset.tracks.add_video_fields`): ``videos``, each
+    image's ``video_id`` and ``frame_id``, and each annotation the track ids of the
+    annotation it is in ``every``. A truth without ``videos`` (no sequence) leaves ``seen``
+    as it is.
+
+    The track ids are matched, not recomputed: a visible-label file holds lines of its
+    ``labels/`` file in their order, so each visible annotation is the next annotation of its
+    image in ``every`` with the same class and box (counting positions would give a boat the
+    track id of the hidden ship before it). One that matches none raises
+    :class:`MetricInputError` naming its file in ``folder`` (``labels_visible/<level>``): a
+    visible label that is no vessel's.
+    """
+    if "videos" not in every:
+        return
+    images = {image["id"]: image for image in every["images"]}
+    for image in seen["images"]:
+        source = images[image["id"]]  # the same images, ids and order (build_coco)
+        image.update({key: source[key] for key in VIDEO_IMAGE_KEYS if key in source})
+    pending: dict[int, list[dict[str, Any]]] = defaultdict(list)
+    for annotation in every["annotations"]:
+        pending[annotation["image_id"]].append(annotation)
+    for annotation in seen["annotations"]:
+        queue = pending[annotation["image_id"]]
+        key = (annotation["category_id"], annotation["bbox"])
+        while queue and (queue[0]["category_id"], queue[0]["bbox"]) != key:
+            queue.pop(0)
+        if not queue:
+            name = Path(images[annotation["image_id"]]["file_name"]).stem
+            raise located(
+                folder / f"{name}.txt",
+                "a box that the scene's labels/ file does not hold in this order (visible "
+                "labels are lines of labels/, in their order): a damaged or foreign file",
+            )
+        source = queue.pop(0)
+        annotation.update({key: source[key] for key in TRACK_KEYS if key in source})
+    seen["videos"] = every["videos"]
 
 
 def _name_images(truth: dict[str, list[dict[str, object]]], level: str) -> None:
