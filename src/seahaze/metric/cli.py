@@ -26,9 +26,12 @@ from seahaze.metric.evaluate import (
     evaluator_name,
     format_score,
     same_evaluator,
+    table_labels,
 )
 from seahaze.metric.evaluate import evaluate_dataset as evaluate_levels
 from seahaze.metric.reader import (
+    LABEL_FOLDERS,
+    PAPER_LABELS,
     Dataset,
     dehazed_images,
     level_visibility_m,
@@ -165,7 +168,7 @@ def _run_detector(
 @_guarded("eval")
 def cmd_eval(args: argparse.Namespace) -> int:
     """``seahaze metric eval``: mAP50 and mAP50-95 per level."""
-    dataset = load_dataset(args.dataset, args.split)
+    dataset = load_dataset(args.dataset, args.split, args.labels)
     level = parse_level(args.level) if args.level else None
     results = evaluate_levels(dataset, args.pred, level=level, max_dets=args.max_dets)
     if args.json:
@@ -173,6 +176,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
             json.dumps(
                 {
                     "evaluator": evaluator_name(args.max_dets),
+                    "labels": dataset.labels,
                     "levels": [_result_json(r) for r in results],
                 },
                 indent=2,
@@ -180,8 +184,15 @@ def cmd_eval(args: argparse.Namespace) -> int:
         )
     else:
         print("\n".join(_results_table(results)))
-        print(f"({evaluator_name(args.max_dets)})")
+        print(f"({evaluator_name(args.max_dets)}{_truth_note(dataset)})")
     return 0
+
+
+def _truth_note(dataset: Dataset) -> str:
+    """What the scores were measured against, where it is not the paper's labels."""
+    if dataset.labels == PAPER_LABELS:
+        return ""  # the default's output stays as it was
+    return f"; ground truth {LABEL_FOLDERS[dataset.labels]}/: the vessels each level's image shows"
 
 
 # --------------------------------------------------------------------------------------------
@@ -192,7 +203,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
 def cmd_calibrate(args: argparse.Namespace) -> int:
     """``seahaze metric calibrate``: the detector's level → mAP50 table, saved as CSV + JSON;
     with ``--model`` the detector first predicts every level into ``--pred``."""
-    dataset = load_dataset(args.dataset, args.split)
+    dataset = load_dataset(args.dataset, args.split, args.labels)
     detector = args.detector or (args.model.stem if args.model else None)
     if detector is None:
         raise MetricInputError("--detector NAME is needed without --model (e.g. yolo11n)")
@@ -207,8 +218,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     csv_path, json_path = save_table(table, args.out)
     print("\n".join(_results_table(results)))
     print(
-        f"calibration table of {table.detector} ({len(table.points)} levels) written to "
-        f"{csv_path} and {json_path}"
+        f"calibration table of {table.detector} ({len(table.points)} levels"
+        f"{_truth_note(dataset)}) written to {csv_path} and {json_path}"
     )
     _warn_non_monotone(table)
     return 0
@@ -236,7 +247,7 @@ def cmd_newvis(args: argparse.Namespace) -> int:
     if args.pred is not None:
         if args.dataset is None or level is None:
             raise MetricInputError("--pred needs --dataset DIR and --level (e.g. v0800)")
-        dataset = load_dataset(args.dataset, args.split)
+        dataset = load_dataset(args.dataset, args.split, args.labels)
         if args.model is not None:
             folders = {level: dehazed_images(args.images, dataset, level)}
             _run_detector(args, dataset, folders)
@@ -254,6 +265,15 @@ def cmd_newvis(args: argparse.Namespace) -> int:
                 f"table {args.table} was not built by this evaluator "
                 f"({table.evaluator or 'unknown'}); mAP50 from different evaluators is not "
                 "interchangeable"
+            )
+        if table_labels(table) != dataset.labels:
+            # Not fatal, as for the evaluator: a CSV table says nothing (read as the paper's),
+            # but the two scores must come from the same ground truth to be compared.
+            _warn(
+                f"table {args.table} was calibrated against --labels {table_labels(table)} "
+                f"({LABEL_FOLDERS[table_labels(table)]}/), the restored images are scored "
+                f"against --labels {dataset.labels} ({LABEL_FOLDERS[dataset.labels]}/); mAP50 "
+                "against different ground truths is not comparable"
             )
         value = scores.map50
     else:
@@ -344,6 +364,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
         "0.001, IoU 0.7, 300 detections, its training image size) and write PRED_DIR's files "
         "(needs pip install 'seahaze[detect]'; docs/detectors.md)",
     }
+    labels = {
+        "choices": tuple(LABEL_FOLDERS),
+        "default": PAPER_LABELS,
+        "help": "ground truth: paper (labels/<level>/, every labelled vessel at every level: "
+        "the MSVD paper's protocol, the default) or visible (labels_visible/<level>/, only "
+        "the vessels seen in each level's image; needs a dataset rendered with "
+        "labels.write_visible; docs/metric.md)",
+    }
     max_dets = {
         "type": int,
         "default": DEFAULT_MAX_DETS,
@@ -357,7 +385,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
         help="mAP50 and mAP50-95 of YOLO predictions per level",
         description="COCO mAP50 and mAP50-95 (faster_coco_eval) of YOLO-format "
         "predictions 'class cx cy w h conf' against the dataset's "
-        "labels, per level.",
+        "labels (--labels: every vessel, or the vessels each image shows), per level.",
     )
     ev.add_argument(
         "--dataset",
@@ -375,6 +403,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     )
     ev.add_argument("--level", help="only this level (v1000, 1000 or clean)")
     ev.add_argument("--split", **split)
+    ev.add_argument("--labels", **labels)
     ev.add_argument("--max-dets", **max_dets)
     ev.add_argument("--json", action="store_true", help="print JSON instead of a table")
     ev.set_defaults(func=cmd_eval)
@@ -404,6 +433,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     cal.add_argument("--model", **model)
     _add_detector_flags(cal)
     cal.add_argument("--split", **split)
+    cal.add_argument("--labels", **labels)
     cal.add_argument(
         "--out", required=True, type=Path, metavar="T", help="output path; writes T.csv and T.json"
     )
@@ -439,6 +469,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     )
     _add_detector_flags(nv)
     nv.add_argument("--split", **split)
+    nv.add_argument("--labels", **labels)
     nv.add_argument("--max-dets", **max_dets)
     nv.add_argument("--json", action="store_true", help="print JSON")
     nv.set_defaults(func=cmd_newvis)

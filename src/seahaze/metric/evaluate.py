@@ -20,6 +20,7 @@ from faster_coco_eval import COCO, COCOeval_faster
 
 from seahaze.metric.errors import MetricInputError, located
 from seahaze.metric.reader import (
+    PAPER_LABELS,
     Dataset,
     ImageTruth,
     YoloBox,
@@ -259,6 +260,8 @@ def calibrate(
 
     Every hazy level needs ``pred_root/<level>/`` (a missing folder is an error, not a zero);
     the clean level is scored too when its folder exists and is kept in the JSON as a reference.
+    A dataset opened with ``labels="visible"`` is scored against its visible-object labels, and
+    the table records ``labels: visible``.
     """
     check_calibratable(dataset, detector)
     hazy = dataset.hazy_levels
@@ -282,6 +285,10 @@ def calibrate(
             )
         )
     extra: dict[str, object] = {} if dataset.split is None else {"split": dataset.split}
+    if dataset.labels != PAPER_LABELS:
+        # Only the other protocol is recorded: a table of the paper's protocol keeps the bytes
+        # it always had, and a table without the key is read as the paper's (table_labels).
+        extra["labels"] = dataset.labels
     if CLEAN_LEVEL in dataset.levels and (Path(pred_root) / CLEAN_LEVEL).is_dir():
         clean = evaluate_level(dataset, CLEAN_LEVEL, pred_root, max_dets=max_dets)
         results.insert(0, clean)
@@ -299,6 +306,13 @@ def calibrate(
         extra=extra,
     )
     return table, results
+
+
+def table_labels(table: CalibrationTable) -> str:
+    """The ground truth (``--labels``) a table was calibrated against: its ``labels`` entry,
+    else ``paper`` (tables of the paper's protocol, CSV files and published tables have none)."""
+    value = table.extra.get("labels", PAPER_LABELS)
+    return value if isinstance(value, str) else PAPER_LABELS
 
 
 def format_score(value: float | None) -> str:

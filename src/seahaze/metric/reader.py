@@ -5,6 +5,11 @@ Dataset layout (written by the renderer)::
     DIR/data.yaml                   # Ultralytics: names {0: container_ship, ...}, split per level
     DIR/images/<level>/<scene>.png  # level: clean, v0300, v0400, ... (zero-padded metres)
     DIR/labels/<level>/<scene>.txt  # 'class cx cy w h' normalised; an empty file = no objects
+    DIR/labels_visible/<level>/<scene>.txt  # labels.write_visible: the vessels each image shows
+
+Which label folder is the ground truth is the dataset's ``labels`` (``--labels``, see
+:data:`LABEL_FOLDERS`): ``paper`` (``labels/``, every labelled vessel at every level, the MSVD
+protocol and the default) or ``visible`` (``labels_visible/``).
 
 A prediction folder mirrors the labels: ``PRED/<level>/<scene>.txt`` with
 ``class cx cy w h conf`` lines, or ``PRED/<scene>.txt`` for a single level. A missing prediction
@@ -29,6 +34,13 @@ from seahaze.yamlguard import MAX_SCENE_BYTES, YamlLimitError, compose_limited, 
 
 IMAGE_SUFFIXES: tuple[str, ...] = (".png", ".jpg", ".jpeg")
 """Image files recognised in ``images/<level>/`` (the renderer writes PNG)."""
+
+LABEL_FOLDERS: dict[str, str] = {"paper": "labels", "visible": "labels_visible"}
+"""``--labels`` → the folder of YOLO labels scored against: ``paper`` (every labelled vessel at
+every level, the MSVD paper's protocol) or ``visible`` (per level the vessels seen in that
+level's image, written with ``labels.write_visible``; docs/metric.md)."""
+PAPER_LABELS = "paper"
+"""The default ``--labels``: the paper's protocol."""
 
 _LEVEL = re.compile(r"^v(\d+)$")
 _LEVEL_ARG = re.compile(r"^v?(\d+(?:\.\d+)?)\s*(?:m)?$", re.IGNORECASE)
@@ -181,14 +193,17 @@ class Dataset:
     """The split the dataset was opened with (None: every scene)."""
     members: frozenset[str] | None = None
     """The scenes of ``split`` (None: every scene)."""
+    labels: str = PAPER_LABELS
+    """The ground truth scored against, a key of :data:`LABEL_FOLDERS`."""
 
     def image_dir(self, level: str) -> Path:
         """``root/images/<level>``."""
         return self.root / "images" / level
 
     def label_dir(self, level: str) -> Path:
-        """``root/labels/<level>``."""
-        return self.root / "labels" / level
+        """The level's ground-truth folder: ``root/labels/<level>``, or with ``labels``
+        ``visible`` ``root/labels_visible/<level>``."""
+        return self.root / LABEL_FOLDERS[self.labels] / level
 
     @property
     def hazy_levels(self) -> tuple[str, ...]:
@@ -224,16 +239,19 @@ def _class_names(path: Path, doc: object) -> tuple[str, ...]:
     raise located(path, "missing 'names' (a list or a {0: name, 1: ...} mapping of classes)")
 
 
-def load_dataset(root: Path | str, split: str | None = None) -> Dataset:
+def load_dataset(root: Path | str, split: str | None = None, labels: str = PAPER_LABELS) -> Dataset:
     """Open a dataset folder: class names from ``data.yaml``, levels from ``images/``; with
-    ``split``, only the scenes ``dataset.json`` puts in that split.
+    ``split``, only the scenes ``dataset.json`` puts in that split; ``labels`` picks the ground
+    truth (:data:`LABEL_FOLDERS`: ``paper``, the default, or ``visible``).
 
-    Raises :class:`MetricInputError` if ``data.yaml`` or ``images/`` is missing or unusable, or
-    the dataset has no such split.
+    Raises :class:`MetricInputError` if ``data.yaml`` or ``images/`` is missing or unusable,
+    the dataset has no such split, or ``labels`` is ``visible`` and it has no visible labels.
     """
     root = Path(root)
     if not root.is_dir():
         raise located(root, "dataset folder not found")
+    if labels not in LABEL_FOLDERS:
+        raise MetricInputError(f"--labels {labels!r}: allowed {', '.join(LABEL_FOLDERS)}")
     data_yaml = root / "data.yaml"
     if not data_yaml.is_file():
         raise located(
@@ -255,7 +273,15 @@ def load_dataset(root: Path | str, split: str | None = None) -> Dataset:
     if not levels:
         raise located(images, "no level folders (clean, v0300, v0400, ...)")
     members = _split_members(root / "dataset.json", split) if split is not None else None
-    return Dataset(root, names, tuple(levels), split, members)
+    if labels != PAPER_LABELS and not (root / LABEL_FOLDERS[labels]).is_dir():
+        # Checked here, before a detector runs on every level, and said in terms of the
+        # dataset: a folder rendered without labels.write_visible (or before it existed).
+        raise MetricInputError(
+            f"--labels {labels}: dataset {root} has no {LABEL_FOLDERS[labels]}/ folder (it was "
+            "rendered without labels.write_visible, or before that option existed); render it "
+            f"with labels.write_visible: true, or score every vessel with --labels {PAPER_LABELS}"
+        )
+    return Dataset(root, names, tuple(levels), split, members, labels)
 
 
 def _split_members(manifest: Path, split: str) -> frozenset[str]:
