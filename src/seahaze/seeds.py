@@ -10,6 +10,7 @@ output contract: changing one changes the bytes of every dataset rendered with i
 
 from __future__ import annotations
 
+import hashlib
 import zlib
 from enum import IntEnum
 
@@ -36,6 +37,9 @@ class Stream(IntEnum):
     """Scene seeds of a batch, from (master seed, template name, scene index)."""
     VARIATION = 12
     """Per scene, one generator per varied quantity of the ``variation:`` ranges."""
+    # Images (seahaze.imaging)
+    DITHER = 13
+    """The dither of each PNG, per scene and level (``render.dither``)."""
 
 
 class RenderPass(IntEnum):
@@ -92,3 +96,18 @@ def scene_seed(master: int, template: str, index: int) -> int:
 def variation_rng(scene: int, quantity: int) -> np.random.Generator:
     """The generator of varied quantity number ``quantity`` of the scene with seed ``scene``."""
     return np.random.default_rng(np.random.SeedSequence([scene, int(Stream.VARIATION), quantity]))
+
+
+def dither_seed(master: int, scene: str, level: str) -> np.random.SeedSequence:
+    """The seed of the dither of image ``level`` (``clean``, ``v0300``, ...) of scene ``scene``
+    whose master seed is ``master``.
+
+    Both names enter whole, through SHA-256 (stable across runs, unlike ``hash``; CRC-32 would
+    give two of a batch's 10^5 scene names the same key), so every image of a dataset, and the
+    same image under another seed, gets its own noise.
+    """
+
+    def key(name: str) -> int:
+        return int.from_bytes(hashlib.sha256(name.encode("utf-8")).digest()[:16], "little")
+
+    return np.random.SeedSequence([master, int(Stream.DITHER), key(scene), key(level)])

@@ -738,12 +738,29 @@ class RenderSpec(_Spec):
         "images, the EXRs stay the undenoised linear radiance (`--denoise` overrides; "
         'docs/benchmarks.md, "Ground-truth noise").',
     )
+    dither: Literal["on", "off"] = Field(
+        "on",
+        description="`on`: noise of ±1 code (triangular) is added to each 8-bit PNG value "
+        "before rounding, so a smooth hazy sky keeps its gradient as an even grain instead of "
+        "bands one code apart (seeded from `render.seed`, the scene and the image: the same "
+        "config gives the same bytes; clipped black and white stay); `off`: the nearest code. "
+        "The EXRs are not touched. See docs/dataset-format.md and docs/benchmarks.md, "
+        '"Why are the PNGs dithered?".',
+    )
 
-    @field_validator("denoise", mode="before")
+    @field_validator("denoise", "dither", mode="before")
     @classmethod
-    def _denoise_from_bool(cls, value: Any) -> Any:
+    def _on_off_from_bool(cls, value: Any) -> Any:
         # YAML 1.1 (PyYAML) reads a bare on/off as a boolean.
         return {True: "on", False: "off"}.get(value, value) if isinstance(value, bool) else value
+
+    @model_serializer(mode="wrap")
+    def _omit_default_dither(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # The default keeps a recorded config byte-identical to before the field existed.
+        data = handler(self)
+        if self.dither == "on":
+            data.pop("dither", None)
+        return data
 
     @field_validator("exposure")
     @classmethod
@@ -1122,6 +1139,7 @@ def with_overrides(
     frames: int | None = None,
     fps: float | None = None,
     denoise: str | None = None,
+    dither: str | None = None,
 ) -> SceneSpec:
     """A copy of ``spec`` with the command line's overrides (None: keep the scene's value).
 
@@ -1134,7 +1152,14 @@ def with_overrides(
             f"--fps {fps:g} needs a sequence: pass --frames N too, or add sequence: "
             "{frames: N} to the scene (a still scene has one frame and no frame rate)"
         )
-    render = {"spp": spp, "seed": seed, "mode": mode, "variant": variant, "denoise": denoise}
+    render = {
+        "spp": spp,
+        "seed": seed,
+        "mode": mode,
+        "variant": variant,
+        "denoise": denoise,
+        "dither": dither,
+    }
     changes: dict[str, Any] = {"render": {k: v for k, v in render.items() if v is not None}}
     sequence = {"frames": frames, "fps": fps}
     if any(v is not None for v in sequence.values()):

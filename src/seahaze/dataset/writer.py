@@ -1,8 +1,10 @@
 """Write one rendered scene into a dataset folder: images, labels, distance and metadata.
 
 Images are the linear radiance exposed with the scene's one exposure and sRGB-encoded
-(:mod:`seahaze.imaging`); with ``write_exr`` the linear radiance is written too. Every level
-gets the same label file: the boxes do not depend on the haze (the MSVD paper's protocol). With
+(:mod:`seahaze.imaging`), dithered as ``meta``'s ``render`` record says (``render.dither``:
+each image with its own seed, from the scene's seed, its name and the level; a record without
+it, the nearest code); with ``write_exr`` the linear radiance is written too. Every level gets
+the same label file: the boxes do not depend on the haze (the MSVD paper's protocol). With
 ``labels.write_visible`` each level also gets the labels of the vessels seen in its image
 (``labels_visible/<level>/``, :mod:`seahaze.visible`).
 """
@@ -46,6 +48,8 @@ def _write_image(
 ) -> None:
     """The PNG of ``shown`` (denoised when denoising is on) and the EXR of the rendered,
     undenoised ``radiance``."""
-    fileio.write_png(layout.image(level, scene.name), imaging.to_srgb8(shown, scene.exposure))
+    dither = imaging.png_dither(scene.meta.get("render", {}), scene.name, level)
+    image8 = imaging.to_srgb8(shown, scene.exposure, dither)
+    fileio.write_png(layout.image(level, scene.name), image8)
     if scene.write_exr:
         fileio.write_rgb_exr(layout.exr(level, scene.name), radiance)
