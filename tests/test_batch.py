@@ -252,8 +252,8 @@ def test_progress_shows_scenes_images_per_second_and_eta(template, tty):
 
 def test_a_scene_that_renders_for_long_gives_heartbeats(template, tmp_path):
     """Without a terminal, a line and a ``heartbeat`` log event come every ``heartbeat_s``
-    while a scene renders (a batch log never sits silent for minutes); the render runs in its
-    own thread, so the waiting main thread can say so."""
+    while a scene renders (a batch log never sits silent for minutes), naming the step the
+    render is in; they come from the signal watcher's thread while the main one renders."""
     spec, name = load_scene(template)
     plan = plan_scenes([(spec, name)], 1)
     stream, log = _Stream(False), tmp_path / "log.jsonl"
@@ -265,6 +265,8 @@ def test_a_scene_that_renders_for_long_gives_heartbeats(template, tmp_path):
     assert beats and all(e["done"] == 0 and e["planned"] == 1 for e in beats)
     assert [e["seconds"] for e in beats] == sorted(e["seconds"] for e in beats)
     assert "0/1 scenes" in stream.getvalue() and "elapsed, rendering" in stream.getvalue()
+    steps = {e["stage"].removeprefix(f"{name}: ").split(" ")[0] for e in beats if "stage" in e}
+    assert steps and steps <= {"building", "scene", "diffuse", "camera", "vessel-light", "clean"}
     assert events[0]["event"] == "start" and events[-1]["event"] == "end"
 
 

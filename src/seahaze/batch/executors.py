@@ -16,7 +16,7 @@ from typing import Any
 
 from ..dataset.layout import Layout
 from ..dataset.writer import write_scene
-from ..interrupts import WAIT_STEP_S, run_interruptibly
+from ..interrupts import WAIT_STEP_S, stoppable
 from ..render.engine import render_scene
 from ..spec import SceneSpec
 
@@ -84,9 +84,8 @@ class _InProcess:
             signalled.clear()
             start = time.perf_counter()
             try:
-                scene = run_interruptibly(
-                    lambda: render_scene(job.spec, job.name, self.note, job.frame), self.tick
-                )
+                with stoppable(self.tick):
+                    scene = render_scene(job.spec, job.name, self.note, job.frame)
                 # Files are written only after the whole scene rendered, so a render cut short
                 # by an ignored SIGINT never reaches the folder.
                 if not signalled.is_set():

@@ -72,10 +72,16 @@ class DatasetLock:
                 ) from None
             raise err
 
-    def __exit__(self, *exc: object) -> None:
+    def remove_file(self) -> None:
+        """Remove the lock file (the flock itself ends with the process): what a process
+        stopped hard inside a render leaves behind is then nothing."""
         if self._fd is not None:
             with contextlib.suppress(OSError):
                 self.path.unlink()
+
+    def __exit__(self, *exc: object) -> None:
+        if self._fd is not None:
+            self.remove_file()
             os.close(self._fd)
             self._fd = None
 

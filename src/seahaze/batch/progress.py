@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -53,8 +54,15 @@ class Reporter:
         self._planned = self._done = self._images = self._failed = 0
         self._done_before = self._to_render = 0
         self._last_news = self._last_refresh = time.perf_counter()
+        self._stage = ""  # the latest step of an in-process render, for the heartbeat
+        # The heartbeat comes from the signal watcher's thread while the main one renders.
+        self._lock = threading.RLock()
 
     def _event(self, event: str, **data: Any) -> None:
+        with self._lock:
+            self._log_event(event, data)
+
+    def _log_event(self, event: str, data: dict[str, Any]) -> None:
         self._last_news = time.perf_counter()
         if self._log is not None:
             record = {"time": round(time.time(), 3), "event": event, **data}
@@ -68,7 +76,11 @@ class Reporter:
     def heartbeat(self) -> None:
         """Called often while scenes render: redraw the bar (its clock) on a terminal; else,
         after ``heartbeat_s`` (default :data:`HEARTBEAT_S`) without a line, say how far the
-        batch is (and log it)."""
+        batch is (and log it). May be called from another thread than the batch's."""
+        with self._lock:
+            self._heartbeat()
+
+    def _heartbeat(self) -> None:
         now = time.perf_counter()
         if self._bar is not None:
             if now - self._last_refresh >= BAR_REFRESH_S:
@@ -80,18 +92,23 @@ class Reporter:
         self._last_news = now
         elapsed = now - self._start
         finished = self._done + self._failed
-        self._event("heartbeat", done=self._done, planned=self._planned, seconds=round(elapsed, 1))
+        stage = {"stage": self._stage} if self._stage else {}
+        seconds = round(elapsed, 1)
+        self._event("heartbeat", done=self._done, planned=self._planned, seconds=seconds, **stage)
         if not self.quiet:
+            doing = f" ({self._stage})" if self._stage else ""
             self._print(
-                f"[seahaze] {finished}/{self._planned} scenes, {_hms(elapsed)} elapsed, rendering"
+                f"[seahaze] {finished}/{self._planned} scenes, {_hms(elapsed)} elapsed, "
+                f"rendering{doing}"
             )
 
     def _print(self, message: str) -> None:
-        self._last_news = time.perf_counter()
-        if self._bar is not None:
-            self._bar.write(message, file=self.stream)
-        else:
-            print(message, file=self.stream, flush=True)
+        with self._lock:
+            self._last_news = time.perf_counter()
+            if self._bar is not None:
+                self._bar.write(message, file=self.stream)
+            else:
+                print(message, file=self.stream, flush=True)
 
     def note(self, message: str) -> None:
         """An informational message (per-pass timings of in-process renders, resume notes)."""
@@ -101,7 +118,10 @@ class Reporter:
             self._print(f"[seahaze] {message}")
 
     def pass_note(self, message: str) -> None:
-        """Progress inside one scene (a pass finished), from in-process renders."""
+        """Progress inside one scene (a step started or finished), from in-process renders;
+        the heartbeat repeats the latest."""
+        with self._lock:
+            self._stage = message
         if self._notes is not None:
             self._notes(message)
         elif self._bar is not None:

@@ -43,6 +43,7 @@ from ..dataset.card import remove_card, write_card
 from ..dataset.splits import SPLIT_NAMES
 from ..dataset.tracks import write_tracks
 from ..fileio import write_json, write_text
+from ..interrupts import on_hard_stop
 from ..metric.errors import MetricInputError
 from ..metric.ground_truth import write_coco
 from ..vessels import CLASS_NAMES
@@ -121,7 +122,7 @@ def run_batch(
         client = connect_dask(options.scheduler or "", wait_s=options.dask_wait, note=reporter.warn)
     try:
         root.mkdir(parents=True, exist_ok=True)
-        with DatasetLock(root, reporter.warn):
+        with DatasetLock(root, reporter.warn) as lock, on_hard_stop(lock.remove_file):
             started = time.perf_counter()
             ledger = open_ledger(plan, root, options.force, reporter)
             stop = render_pending(ledger, options, client, reporter)

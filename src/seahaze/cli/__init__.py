@@ -8,7 +8,6 @@ locked folder, a changed config), 3 a write error stopped the batch (disk full, 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 
 from .. import __version__
@@ -51,17 +50,5 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def entry() -> None:
-    """The ``seahaze`` console command: :func:`main`, then exit with its code.
-
-    After an interrupt that left a render running in its thread (drjit cannot stop a kernel;
-    :func:`seahaze.interrupts.run_interruptibly`), the process exits at once instead of
-    waiting at interpreter shutdown for that render to end: the batch has already released
-    its lock and recorded the scene as pending, and the render writes nothing.
-    """
-    code = main()
-    interrupts = sys.modules.get("seahaze.interrupts")  # imported only by a render
-    if interrupts is not None and interrupts.render_abandoned():
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(code)
-    sys.exit(code)
+    """The ``seahaze`` console command: :func:`main`, then exit with its code."""
+    sys.exit(main())

@@ -19,7 +19,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
     Exit code 0 when every level is within the tolerance, 1 when one is not, 2 on bad input.
     """
     from .. import verify
-    from ..interrupts import run_interruptibly
+    from ..interrupts import stoppable
     from ..render.variant import VariantError
     from ..spec import SceneSpec
 
@@ -69,9 +69,8 @@ def cmd_verify(args: argparse.Namespace) -> int:
             target_width_deg=args.target_width,
             denoise=args.denoise == "on",
         )
-        report = run_interruptibly(
-            lambda: verify.run_verify(base, levels, settings, progress=say, keep=measurements)
-        )
+        with stoppable():
+            report = verify.run_verify(base, levels, settings, progress=say, keep=measurements)
     except (verify.VerifyInputError, VariantError, ValueError) as err:
         raise UsageError(str(err)) from None
     print(verify.format_report(report))

@@ -198,6 +198,7 @@ def render_scene(
     time and every vessel's track id and pose); None renders the scene as written.
     """
     timings: dict[str, float] = {}
+    progress(f"{name}: building the sea, vessels and scene")
     session = open_session(spec, timings=timings, frame=frame)
     n_vessels = len(session.geometry.vessels)
     progress(f"{name}: scene loaded ({session.variant}, {n_vessels} vessels)")
@@ -207,7 +208,8 @@ def render_scene(
     if mode == "physical":
         # One set of camera paths for the clean image and every level.
         with _timed(timings, "pass"):
-            clean, levels = session.level_renderer().render_all(sigmas)
+            stage = lambda step: progress(f"{name}: {step}")  # noqa: E731
+            clean, levels = session.level_renderer().render_all(sigmas, stage=stage)
         progress(f"{name}: clean + {len(levels)} levels in one pass, {timings['pass']:.1f} s")
     else:
         with _timed(timings, "clean"):

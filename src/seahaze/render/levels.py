@@ -16,6 +16,7 @@ Modes
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -105,10 +106,12 @@ class LevelRenderer:
         sigmas: list[Extinction],
         render: RenderSpec | None = None,
         haze: HazeSpec | None = None,
+        stage: Callable[[str], None] | None = None,
     ) -> tuple[np.ndarray, list[LevelRender]]:
         """The clean radiance and every level of extinction ``sigmas``: in the physical mode
         from one set of camera paths (the clean radiance is its σ = 0 member); otherwise the
-        clean pass given at construction and one render per level."""
+        clean pass given at construction and one render per level. ``stage`` hears each step
+        of the physical pass start (progress)."""
         render, haze = render or self.settings, haze or self.haze
         if self.mode != "physical":
             return self.clean, [self.render(s, i, render, haze) for i, s in enumerate(sigmas)]
@@ -118,7 +121,7 @@ class LevelRenderer:
             settings = settings_from(spec.render.estimator)
             self._physical = PhysicalRenderer(self.loaded, spec, settings, self.geometry)
         seed = render_seed(render.seed, RenderPass.PHYSICAL_PASS)
-        out = self._physical.render(sigmas, haze.albedo, haze.g, render.spp, seed)
+        out = self._physical.render(sigmas, haze.albedo, haze.g, render.spp, seed, stage)
         return out.clean, [LevelRender(r) for r in out.levels]
 
 

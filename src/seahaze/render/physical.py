@@ -17,6 +17,7 @@ from __future__ import annotations
 import importlib
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -126,11 +127,18 @@ class PhysicalRenderer:
         return np.stack(channels, axis=-1)
 
     def render(
-        self, sigmas: list[Extinction], albedo: float, g: float, spp: int, seed: int
+        self,
+        sigmas: list[Extinction],
+        albedo: float,
+        g: float,
+        spp: int,
+        seed: int,
+        stage: Callable[[str], None] | None = None,
     ) -> PhysicalPass:
         """The clean radiance and that of every level of extinction ``sigmas`` (1/m, grey or
         per channel R, G, B; each > 0) of the medium with ``albedo`` and ``g``, all from the
-        camera paths of ``seed``.
+        camera paths of ``seed``. ``stage`` is told when each step starts (tables, each
+        group's camera and vessel-light passes): progress for people, nothing else.
 
         Levels are rendered in groups (:func:`levels_per_pass`); every group replays the same
         camera paths, so the clean image and every level share their random numbers.
@@ -140,14 +148,19 @@ class PhysicalRenderer:
             raise ValueError("every hazy level needs a positive extinction")
         cam = self.loaded.camera
         start = time.perf_counter()
+        say = stage or (lambda _message: None)
         photons = self.settings.photons_for(cam.width * cam.height * spp)
+        if len(sigma):
+            say(f"diffuse tables ({photons:,} photons)")
         tables = self.tables(sigma, albedo, g, seed, photons) if len(sigma) else None
         table_seconds = time.perf_counter() - start
         most = self.settings.max_levels_per_pass
         group = levels_per_pass(cam.width, cam.height, len(sigma), most)
+        groups = -(-max(len(sigma), 1) // group)
         clean: np.ndarray | None = None
         levels: list[np.ndarray] = []
         for first in range(0, max(len(sigma), 1), group):
+            of = f" {first // group + 1}/{groups}" if groups > 1 else ""
             part = slice(first, first + group)
             n = len(sigma[part])
             if n == 0:  # no hazy level: a clean pass through a one-level integrator
@@ -159,11 +172,13 @@ class PhysicalRenderer:
                 grid = DEFAULT_GRID
                 part_tables = np.zeros((grid.n_z, grid.n_mu, grid.n_phi, 3), np.float32)
             camera_pass = self.integrator("camera", part_sigma, albedo, g, part_tables)
+            say(f"camera pass{of}, {stratified_spp(spp)} spp")
             image = render_radiance(self.loaded, stratified_spp(spp), seed, integrator=camera_pass)
             if clean is None:
                 clean = image[..., :3].copy()
             if len(sigma):
                 if self.settings.vessel_light_share > 0.0:
+                    say(f"vessel-light pass{of}")
                     image += self.vessel_light(part_sigma, albedo, g, part_tables, spp, seed)
                 # Light is never negative: render_radiance's gamut clip, after the correction.
                 levels += [np.maximum(image[..., 3 + 3 * k : 6 + 3 * k], 0.0) for k in range(n)]
