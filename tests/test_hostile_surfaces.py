@@ -17,11 +17,16 @@ Cases per surface (``test_the_corpus_counts_match_this_docstring`` keeps them tr
 - meshes: 8 — empty file, NaN and inf vertices (also an unused one in a PLY, and one a PLY
   face uses, which trimesh's processed load drops with the face), zero extent, up axis equal
   to the forward axis (2)
-- export: 65 — every ``--layout`` on a half-finished dataset, ``--out`` inside or above the
+- export: 66 — every ``--layout`` on a half-finished dataset, ``--out`` inside or above the
   dataset or through a link into it, onto a file or under one, onto a foreign folder or a
   planted record, ``--levels``, unknown layout and link, missing images, damaged
   ``dataset.json`` (deep, scene entries that are not mappings, levels without a visibility,
   names that escape, NaN, 5000-digit numbers …), a FIFO or folder as manifest
+- export hf: 17 — ``--layout hf`` on the hand-written dataset: a scene's meta deep, not a
+  mapping, missing or a folder, a labelled vessel's box reversed or not numbers, its class not a
+  class, a level missing from its meta, a label file that disagrees with the meta, the depth
+  missing or truncated, an image of another size; a bad ``--license``, one for another layout;
+  no pyarrow (run always; the others need it)
 - table: 29 — ``seahaze metric newvis --table``: deep JSON, wrong types, non-finite and huge
   numbers, a NUL or a 200 kB field in a CSV, not UTF-8, 2 MiB, a FIFO or folder
 - metric dataset: 6 — deep, alias-bomb, nested-names and binary ``data.yaml``; a damaged
@@ -32,7 +37,8 @@ Cases per surface (``test_the_corpus_counts_match_this_docstring`` keeps them tr
 
 No case renders: a render that starts fails the test (the ``no_render`` fixture), and the
 dataset the export and metric cases read is written by hand (``fake_dataset``: 8×4 px images,
-four scenes, two levels, three splits) and checked to export cleanly in every layout.
+depth and meta, four scenes, two levels, three splits) and checked to export cleanly in every
+layout (``hf`` where pyarrow is installed).
 """
 
 from __future__ import annotations
@@ -42,8 +48,10 @@ import json
 import os
 import re
 import shutil
+import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from PIL import Image
 
@@ -51,12 +59,14 @@ from conftest import cli_run
 from seahaze.dataset.manifest import data_yaml_text, level_entries, manifest
 from seahaze.dataset.owned import STATE_ENV
 from seahaze.export.layouts import LAYOUTS as EXPORT_LAYOUTS
+from seahaze.fileio import write_exr
 from seahaze.sceneio import parse_scene_text
 from seahaze.spec import OverrideError, with_overrides
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ROOT / "tests" / "data" / "hostile" / "tiny.yaml"
 HAS_ULTRALYTICS = importlib.util.find_spec("ultralytics") is not None
+HAS_PYARROW = importlib.util.find_spec("pyarrow") is not None
 
 
 # --------------------------------------------------------------------------------------------
@@ -382,6 +392,23 @@ SCENES = {"tiny_00000": "train", "tiny_00001": "train", "tiny_00002": "val", "ti
 CLASSES = ("container_ship", "tug")
 
 
+def scene_meta(levels: list[dict]) -> dict:
+    """The parts of ``meta/<scene>.json`` an ``hf`` export reads: one tug boxed in the middle of
+    the 8×4 image (the label files' ``1 0.5 0.5 0.25 0.5``)."""
+    names = ["clean", *(lv["name"] for lv in levels)]
+    look = {"apparent_contrast": -0.1, "beyond_visibility": False}
+    look |= {"local_contrast": 0.2, "discernible": True}
+    vessel = {"index": 0, "class": "tug", "class_id": 1, "distance_m": 300.0}
+    vessel |= {"box_px": [3.0, 1.0, 5.0, 3.0], "visible_fraction": 1.0}
+    return {
+        "camera": {"resolution": [8, 4]},
+        "levels": [
+            {"name": lv["name"], "sigma_rgb_per_m": [lv["sigma_per_m"]] * 3} for lv in levels
+        ],
+        "vessels": [{**vessel, "levels": {name: look for name in names}}],
+    }
+
+
 def write_dataset(root: Path) -> Path:
     """A finished seahaze dataset as ``seahaze render --split`` leaves it, 8×4 px images."""
     levels = level_entries(LEVELS_M, "koschmieder")
@@ -392,6 +419,13 @@ def write_dataset(root: Path) -> Path:
         for scene in SCENES:
             Image.new("RGB", (8, 4), (40, 60, 90)).save(root / "images" / level / f"{scene}.png")
             (root / "labels" / level / f"{scene}.txt").write_text("1 0.5 0.5 0.25 0.5\n")
+    (root / "meta").mkdir()
+    (root / "depth").mkdir()
+    depth = np.full((4, 8), np.inf, np.float32)
+    depth[2:] = 300.0
+    for scene in SCENES:
+        (root / "meta" / f"{scene}.json").write_text(json.dumps(scene_meta(levels)))
+        write_exr(root / "depth" / f"{scene}.exr", {"Z": depth})
     scenes = {
         name: {"status": "done", "seed": i, "template": "tiny", "index": i, "split": split}
         for i, (name, split) in enumerate(SCENES.items())
@@ -421,6 +455,9 @@ def test_the_hand_written_dataset_exports_in_every_layout(fake_dataset, tmp_path
         code, out, err = run(
             ["export", str(fake_dataset), "--layout", layout, "--out", str(out_dir)]
         )
+        if layout == "hf" and not HAS_PYARROW:
+            assert code == 2 and "seahaze[hf]" in err, err
+            continue
         assert code == 0 and "exported" in out, err
 
 
@@ -880,6 +917,122 @@ def test_weights_without_ultralytics_name_the_install(fake_dataset, tmp_path):
 
 
 # --------------------------------------------------------------------------------------------
+# export --layout hf: the files a row reads
+
+
+def _meta_change(change):
+    """A damage of ``tiny_00001``'s meta: ``change`` applied to its parsed JSON."""
+
+    def damage(ds: Path) -> Path:
+        path = ds / "meta" / "tiny_00001.json"
+        data = json.loads(path.read_text())
+        change(data)
+        path.write_text(json.dumps(data))
+        return path
+
+    return damage
+
+
+def _replace(rel: str, make):
+    """A damage that replaces the dataset file ``rel`` by what ``make(path)`` leaves there."""
+
+    def damage(ds: Path) -> Path:
+        path = ds / rel
+        path.unlink()
+        make(path)
+        return path
+
+    return damage
+
+
+def _truncate(rel: str):
+    def damage(ds: Path) -> Path:
+        path = ds / rel
+        path.write_bytes(path.read_bytes()[:-40])
+        return path
+
+    return damage
+
+
+VESSEL = ("vessels", 0)
+HF_DAMAGE = {
+    "meta_deep": (
+        _replace("meta/tiny_00001.json", lambda p: p.write_text(_deep(100_000))),
+        ("nested deeper than 32",),
+    ),
+    "meta_a_list": (
+        _replace("meta/tiny_00001.json", lambda p: p.write_text("[]")),
+        ("the file is a list; allowed: a mapping",),
+    ),
+    "meta_missing": (_replace("meta/tiny_00001.json", lambda p: None), ("missing",)),
+    "meta_a_folder": (
+        _replace("meta/tiny_00001.json", lambda p: p.mkdir()),
+        ("not a regular file",),
+    ),
+    "box_reversed": (
+        _meta_change(lambda d: d["vessels"][0].update(box_px=[5, 1, 3, 3])),
+        ("vessels[0].box_px", "x1 > x0"),
+    ),
+    "box_strings": (
+        _meta_change(lambda d: d["vessels"][0].update(box_px=["3", 1, 5, 3])),
+        ("vessels[0].box_px[0] is '3'", "a finite number"),
+    ),
+    "class_not_a_class": (
+        _meta_change(lambda d: d["vessels"][0].update(class_id=2)),
+        ("vessels[0].class_id is 2", "0 to 1"),
+    ),
+    "class_true": (
+        _meta_change(lambda d: d["vessels"][0].update(class_id=True)),
+        ("vessels[0].class_id is true/false",),
+    ),
+    "level_missing": (
+        _meta_change(lambda d: d["levels"].pop()),
+        ("levels has no entry v2000",),
+    ),
+    "label_disagrees": (
+        _replace("labels/v0500/tiny_00001.txt", lambda p: p.write_text("")),
+        ("has 0 boxes where the scene's meta labels 1 vessels",),
+    ),
+    "depth_missing": (_replace("depth/tiny_00001.exr", lambda p: None), ("missing",)),
+    "depth_truncated": (_truncate("depth/tiny_00001.exr"), ("truncated",)),
+    "image_size": (
+        _replace("images/clean/tiny_00001.png", lambda p: Image.new("RGB", (4, 4)).save(p)),
+        ("is 4x4, not 8x4",),
+    ),
+}
+
+
+@pytest.mark.skipif(not HAS_PYARROW, reason="pyarrow is not installed: pip install 'seahaze[hf]'")
+@pytest.mark.parametrize("name", sorted(HF_DAMAGE))
+def test_a_damaged_scene_file_refuses_the_hf_export(name, fake_dataset, tmp_path):
+    ds = dataset_copy(fake_dataset, tmp_path / "ds")
+    damage, words = HF_DAMAGE[name]
+    path = damage(ds)
+    out = tmp_path / "out"
+    export_refused(ds, out, [tmp_path], (str(path), *words), "--layout", "hf")
+    assert not out.exists()
+
+
+HF_FLAGS = [
+    (["--layout", "hf", "--license", "CC BY"], ("--license 'CC BY'", "cc-by-4.0")),
+    (["--layout", "hf", "--license", "../../x"], ("--license '../../x'",)),
+    (["--layout", "yolo", "--license", "mit"], ("only --layout hf writes a licence",)),
+]
+
+
+@pytest.mark.parametrize(("flags", "words"), HF_FLAGS, ids=[" ".join(f) for f, _ in HF_FLAGS])
+def test_bad_licences_are_refused(flags, words, fake_dataset, tmp_path):
+    export_refused(fake_dataset, tmp_path / "out", [tmp_path, fake_dataset], words, *flags)
+
+
+def test_hf_without_pyarrow_names_the_extra(fake_dataset, tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "pyarrow", None)  # what `import pyarrow` meets without it
+    monkeypatch.setitem(sys.modules, "pyarrow.parquet", None)
+    watch = [tmp_path, fake_dataset]
+    export_refused(fake_dataset, tmp_path / "out", watch, ("seahaze[hf]",), "--layout", "hf")
+
+
+# --------------------------------------------------------------------------------------------
 # The counts in the module docstring
 
 
@@ -889,6 +1042,7 @@ def test_the_corpus_counts_match_this_docstring():
         "split": len(SPLITS),
         "workers": len(WORKERS),
         "meshes": len(MESHES) + len(AXES),
+        "export hf": len(HF_DAMAGE) + len(HF_FLAGS) + 1,
         "export": len(LAYOUTS)
         + len(EXPORT_FLAGS)
         + len(EXPORT_USAGE)

@@ -23,7 +23,6 @@ name the other layouts give it, means every split to ``datasets`` and cannot nam
 
 from __future__ import annotations
 
-import importlib.util
 from functools import partial
 
 from ..dataset.splits import ALL_SCENES
@@ -48,23 +47,25 @@ def hub_split(split: str) -> str:
 
 def require_pyarrow() -> None:
     """Raise :class:`ExportError` naming the extra when pyarrow, which writes Parquet, is
-    missing."""
-    if importlib.util.find_spec("pyarrow") is None:
+    missing (checked before the plan, which reads every scene's files, and before writing)."""
+    try:
+        import pyarrow.parquet  # noqa: F401
+    except ImportError:
         raise ExportError(
             f"--layout hf writes Parquet with pyarrow, which is not installed; {HF_INSTALL} "
             "(pyarrow and Hugging Face datasets)"
-        )
+        ) from None
 
 
 def plan_hf(source: SourceDataset, license_id: str = NO_LICENSE) -> ExportPlan:
     """The ``hf`` layout: Parquet shards per level and split, and the card (its front-matter's
-    ``license`` is ``license_id``).
+    ``license`` is ``license_id``). Making the plan needs no pyarrow; its builders do
+    (:func:`require_pyarrow`).
 
     Every file a row reads is checked here, before anything is written: each scene's meta
     (its vessels' boxes against the label files), its depth EXR and its images (complete, the
     size of the camera). Raises :class:`ExportError` (one line naming the file) otherwise.
     """
-    require_pyarrow()
     levels = [level.name for level in source.levels]
     records = {
         scene: read_scene(

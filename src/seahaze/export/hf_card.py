@@ -5,11 +5,16 @@ sections of the dataset folder's card, :mod:`seahaze.dataset.card`), what a row 
 load it, and the citation.
 
 ``datasets.load_dataset`` reads the ``configs`` block to find each configuration's files; the
-Hub shows the rest.
+Hub shows the rest. ``datasets`` caches a local folder under its name and a hash of that block
+(not of the files: measured with datasets 2.19.2 and 5.2.0, a second export into the same
+folder was loaded from the first one's cache), so each configuration's ``description`` carries
+:func:`content_id`, which changes whenever the rows would.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import re
 from typing import Any
 
@@ -56,26 +61,32 @@ def card_text(
             "'seahaze render' command that made it"
         ) from None
     front = yaml.safe_dump(
-        front_matter(rows, license_id), sort_keys=False, allow_unicode=True, width=100
+        front_matter(rows, license_id, content_id(source)),
+        sort_keys=False,
+        allow_unicode=True,
+        width=100,
     )
     sections = [*described, _export(source, rows), _license(license_id), citation_section()]
     return f"---\n{front}---\n\n" + "\n".join(sections)
 
 
-def front_matter(rows: dict[str, dict[str, int]], license_id: str) -> dict[str, Any]:
+def front_matter(rows: dict[str, dict[str, int]], license_id: str, content: str) -> dict[str, Any]:
     """The Hub's YAML metadata: a configuration ``all`` (the default) over every level's
-    files and one per level, each with its splits."""
+    files and one per level, each with its splits and a description naming ``content`` (the
+    export's :func:`content_id`)."""
     splits = list(dict.fromkeys(split for per_level in rows.values() for split in per_level))
     configs: list[dict[str, Any]] = [
         {
             "config_name": DEFAULT_CONFIG,
             "default": True,
+            "description": f"every level; seahaze export {content}",
             "data_files": [{"split": s, "path": f"data/*/{s}-*.parquet"} for s in splits],
         }
     ]
     for level, per_split in rows.items():
         files = [{"split": s, "path": f"data/{level}/{s}-*.parquet"} for s in per_split]
-        configs.append({"config_name": level, "data_files": files})
+        description = f"level {level}; seahaze export {content}"
+        configs.append({"config_name": level, "description": description, "data_files": files})
     total = sum(sum(per_split.values()) for per_split in rows.values())
     return {
         "license": license_id,
@@ -85,6 +96,36 @@ def front_matter(rows: dict[str, dict[str, int]], license_id: str) -> dict[str, 
         "size_categories": [size_category(total)],
         "configs": configs,
     }
+
+
+ROW_FORMAT = 1
+"""Version of what a row holds and how (raised when either changes, so that an export made
+after such a change is not loaded from the cache of an older one)."""
+
+
+def content_id(source: SourceDataset) -> str:
+    """16 hex digits that change whenever the rows of an export of ``source`` would: a SHA-256
+    of the row format, the classes, the exported levels' entries in ``dataset.json`` and every
+    scene's name, split, sequence, frame and ``files_sha256`` (the digest of its meta, depth,
+    images and labels that ``seahaze render`` records; a dataset without one is told apart by
+    the rest only)."""
+    scenes = source.manifest.get("scenes", {})
+    exported = {level.name for level in source.levels}
+    identity = {
+        "row_format": ROW_FORMAT,
+        "classes": list(source.classes),
+        "levels": [
+            entry
+            for entry in source.manifest.get("levels", [])
+            if isinstance(entry, dict) and entry.get("name") in exported
+        ],
+        "scenes": [
+            [name, split, *(scenes[name].get(k) for k in ("sequence", "frame", "files_sha256"))]
+            for name, split in source.scenes.items()
+        ],
+    }
+    text = json.dumps(identity, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def size_category(rows: int) -> str:

@@ -30,7 +30,7 @@ from collections.abc import Callable
 import yaml
 
 from ..visibility import CLEAN_LEVEL
-from .hf import plan_hf
+from .hf import plan_hf, require_pyarrow
 from .plan import ExportPlan
 from .source import ExportError, SourceDataset
 
@@ -130,6 +130,10 @@ LAYOUTS: dict[str, Callable[..., ExportPlan]] = {
 }
 """``--layout`` name → its planner (each takes the :class:`SourceDataset`; ``hf`` also its
 card's ``license_id``)."""
+
+REQUIREMENTS: dict[str, Callable[[], None]] = {"hf": require_pyarrow}
+"""``--layout`` name → a check that what it writes with is installed (raises
+:class:`ExportError` naming the extra), made once the dataset is known to be finished."""
 
 
 def _plan_pairs(

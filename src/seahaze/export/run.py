@@ -20,7 +20,7 @@ from pathlib import Path
 from ..dataset.owned import ForeignFileError, OwnedFiles
 from ..fileio import write_text
 from .hf_card import check_license
-from .layouts import LAYOUTS
+from .layouts import LAYOUTS, REQUIREMENTS
 from .links import Placer
 from .source import ExportError, open_finished
 
@@ -85,6 +85,8 @@ def export_dataset(
     if out == source.root or out.is_relative_to(source.root):
         raise ExportError(f"--out {out}: inside the dataset {source.root}; choose a folder outside")
     _check_out_folder(out)
+    if layout in REQUIREMENTS:
+        REQUIREMENTS[layout]()
     plan = LAYOUTS[layout](source, **options)
     _check_outside_dataset(out, plan.targets(), source.root)
     placer = Placer(link)
