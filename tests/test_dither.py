@@ -221,11 +221,6 @@ def test_render_dither_field() -> None:
     assert imaging.dither_meta("off", 41) == {"dither": "off"}
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="render.engine.render_meta does not record render.dither yet: the writer rounds to "
-    "the nearest code until it does (imaging.dither_meta is the record it needs)",
-)
 def test_rendered_dataset_pngs_are_dithered_as_meta_says(dataset) -> None:
     import json
 

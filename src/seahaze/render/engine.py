@@ -420,8 +420,8 @@ def _visible_labels(
 
 def render_meta(spec: SceneSpec) -> dict[str, Any]:
     """``meta``'s ``render`` entry: the samples actually taken, the ``physical`` mode's
-    estimator settings and vessel-light pass (its samples per pixel and smoothing radius) and
-    what the denoiser did."""
+    estimator settings and vessel-light pass (its samples per pixel and smoothing radius),
+    what the denoiser did and how the PNGs are dithered."""
     from . import denoise
     from .estimator import settings_from
     from .physical import stratified_spp, vessel_light_spp
@@ -432,6 +432,8 @@ def render_meta(spec: SceneSpec) -> dict[str, Any]:
         "spp_used": stratified_spp(spec.render.spp) if physical else spec.render.spp,
         "sampler": PHYSICAL_SAMPLER if physical else "independent",
         "denoise": spec.render.denoise,
+        # How the writer quantises the PNGs (imaging.png_dither reads it back).
+        **imaging.dither_meta(spec.render.dither, spec.render.seed),
     }
     settings = settings_from(spec.render.estimator)
     if physical:
