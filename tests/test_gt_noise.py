@@ -139,6 +139,7 @@ def test_denoised_scene_writes_denoised_png_and_undenoised_exr(tmp_path) -> None
     from seahaze.dataset.layout import Layout
     from seahaze.dataset.writer import write_scene
     from seahaze.render.engine import render_scene
+    from seahaze.seeds import dither_seed
     from seahaze.visibility import CLEAN_LEVEL
 
     spec = small_spec(
@@ -157,7 +158,11 @@ def test_denoised_scene_writes_denoised_png_and_undenoised_exr(tmp_path) -> None
     from PIL import Image
 
     png = np.asarray(Image.open(layout.image(CLEAN_LEVEL, "tiny")).convert("RGB"))
-    np.testing.assert_array_equal(png, imaging.to_srgb8(scene.clean_denoised, scene.exposure))
+    # The PNG is the denoised image, dithered with the image's seed (render.dither's default).
+    dither = dither_seed(3, "tiny", CLEAN_LEVEL)
+    np.testing.assert_array_equal(
+        png, imaging.to_srgb8(scene.clean_denoised, scene.exposure, dither)
+    )
     exr = fileio.read_exr(layout.exr(CLEAN_LEVEL, "tiny"))
     rgb = exr["RGB"] if "RGB" in exr else np.stack([exr[c] for c in "RGB"], axis=-1)
     np.testing.assert_array_equal(rgb, scene.clean)
