@@ -13,9 +13,12 @@ its labelled vessels with class, box, distance and, at that level, contrast and 
 vessel can be seen (:mod:`seahaze.export.hf_rows`, docs/dataset-format.md#the-hf-layout).
 
 Why Parquet rather than ``imagefolder`` with a metadata file, measured in docs/benchmarks.md
-("Hugging Face export"): a few self-contained files that load and stream faster and upload to
-the Hub as they are, at the price of disk space (the clean image and the depth are in every
-level's rows; the other layouts link the dataset's files instead).
+("Which format for the Hugging Face export?"): an imagefolder of linked images is cheaper to
+write, keep and load the first time, but the shards are a few self-contained files that load
+again from the cache at once, keep loading after the folder is moved (an imagefolder's cache
+holds absolute paths), carry their features typed, load with datasets 2.19 and upload to the
+Hub as they are. The price is disk space: the clean image and the depth are in every level's
+rows (the other layouts link the dataset's files instead).
 
 A dataset without a split (``--split none``) is exported as one ``train`` split: ``all``, the
 name the other layouts give it, means every split to ``datasets`` and cannot name one.
