@@ -6,10 +6,14 @@ colour-science's IEC 61966-2-1 encoding (``cctf_encoding`` × 255), not seahaze'
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 from PIL import Image
 
+from conftest import cli_run
 from seahaze import fileio, imaging
 from seahaze.dataset.layout import Layout
 from seahaze.render.engine import RenderedLevel, SceneRender
@@ -241,3 +245,19 @@ def test_rendered_dataset_pngs_are_dithered_as_meta_says(dataset) -> None:
 def _png_at(path) -> np.ndarray:
     with Image.open(path) as image:
         return np.asarray(image)
+
+
+def test_dither_off_on_the_command_line_writes_the_nearest_code(tmp_path) -> None:
+    """``--dither off`` overrides the scene's default: meta records it and every PNG is the
+    nearest code of its EXR (the same render as the ``dataset`` fixture's, 64×36 at 2 spp)."""
+    scene = Path(__file__).resolve().parents[1] / "scenes" / "default.yaml"
+    out = tmp_path / "off"
+    args = ["render", str(scene), "--vis", "300", "--res", "64x36", "--spp", "2"]
+    code, _, err = cli_run([*args, "--out", str(out), "--dither", "off", "--quiet"])
+    assert code == 0, err
+    meta = json.loads((out / "meta" / "default.json").read_text())
+    assert meta["render"]["dither"] == "off" and "dither_seed" not in meta["render"]
+    for level in ("clean", "v0300"):
+        radiance = fileio.read_exr(out / "exr" / level / "default.exr")["RGB"]
+        expected = imaging.to_srgb8(radiance, meta["exposure"])
+        np.testing.assert_array_equal(_png_at(out / "images" / level / "default.png"), expected)

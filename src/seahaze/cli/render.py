@@ -277,6 +277,7 @@ def cmd_render(args: argparse.Namespace) -> int:
                 frames=args.frames,
                 fps=args.fps,
                 denoise=args.denoise,
+                dither=args.dither,
             )
         except OverrideError as err:
             raise UsageError(f"{name}: {err}") from None
@@ -397,6 +398,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="Intel Open Image Denoise on the PNGs of the clean image and every level (EXRs "
         "stay undenoised; needs pip install 'seahaze[denoise]'; default: the scene's "
         "render.denoise)",
+    )
+    parser.add_argument(
+        "--dither",
+        choices=["on", "off"],
+        help="on: triangular noise of +-1 code before rounding the PNGs to 8 bits, so hazy "
+        "skies show no bands (seeded: the same config gives the same bytes); off: the nearest "
+        "code; default: the scene's render.dither (on)",
     )
     parser.add_argument(
         "--res",
