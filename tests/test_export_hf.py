@@ -124,8 +124,9 @@ def test_a_dataset_without_split_is_one_train_split(dataset):
 
 @pytest.fixture(scope="module")
 def hf(tmp_path_factory):
-    """The real ``datasets``, offline (nothing is downloaded), its cache in a temporary
-    folder; skipped without it."""
+    """The real ``datasets``, its home (and so its default cache) in a temporary folder and
+    offline: the environment says so before it is first imported (seahaze never imports it),
+    and loading a local folder needs no network anyway. Skipped without it."""
     with pytest.MonkeyPatch.context() as patch:
         home = tmp_path_factory.mktemp("hf_home")
         for name, value in (
@@ -139,7 +140,6 @@ def hf(tmp_path_factory):
             "datasets",
             reason="Hugging Face datasets is not installed: pip install 'seahaze[hf]'",
         )
-        patch.setattr(datasets.config, "HF_HUB_OFFLINE", True, raising=False)
         datasets.disable_progress_bars()
         yield datasets
 

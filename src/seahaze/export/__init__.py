@@ -1,7 +1,10 @@
 """Views of a finished dataset in the folder layouts other tools read, without copying pixels.
 
 * :mod:`~seahaze.export.source` — the finished dataset an export reads.
-* :mod:`~seahaze.export.layouts` — the layouts (``paired``, ``same-name``, ``reside``, ``yolo``).
+* :mod:`~seahaze.export.layouts` — the layouts (``paired``, ``same-name``, ``reside``, ``yolo``,
+  ``yolo-hazy``, ``hf``), each planned as an :class:`~seahaze.export.plan.ExportPlan`.
+* :mod:`~seahaze.export.hf`, :mod:`~seahaze.export.hf_rows`, :mod:`~seahaze.export.hf_card` —
+  the ``hf`` layout: Parquet shards for Hugging Face ``datasets`` and their card.
 * :mod:`~seahaze.export.links` — hard links, symbolic links or copies.
 * :mod:`~seahaze.export.run` — :func:`export_dataset`.
 
