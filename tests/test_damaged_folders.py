@@ -400,6 +400,7 @@ def test_a_finished_scene_records_the_hash_of_its_files(two_scenes):
             f"{kind}/{level}/dmg.{ext}"
             for level in ("clean", "v1000")
             for kind, ext in (("images", "png"), ("labels", "txt"), ("exr", "exr"))
+            + ((("transmission", "exr"),) if level != "clean" else ())
         ]
     )
     assert record["files_sha256"] == hashlib.sha256(lines.encode()).hexdigest()

@@ -20,6 +20,7 @@ from typing import Any
 
 from .. import fileio
 from ..dataset import FORMAT_VERSION, Layout
+from ..dataset.layout import TRANSMISSION_CHANNELS
 from ..dataset.manifest import BOOKKEEPING_KEYS
 from ..spec import SceneSpec
 from ..visibility import CLEAN_LEVEL, is_level_name
@@ -43,9 +44,10 @@ KINDS = (
     "mot",
     "labels_visible",
     "coco_visible",
+    "transmission",
 )
 """The folders of a dataset (docs/dataset-format.md)."""
-LEVEL_KINDS = ("images", "labels", "exr", "labels_visible")
+LEVEL_KINDS = ("images", "labels", "exr", "labels_visible", "transmission")
 """The folders that hold one folder per level."""
 STRAY_SUFFIXES = (".png", ".jpg", ".jpeg", ".txt")
 """Files in a level folder that the COCO writer reads: one that is not the dataset's would
@@ -344,6 +346,7 @@ def prune(root: Path, old: dict[str, Any], keep_scenes: set[str], keep_levels: s
                     layout.image(level, scene),
                     layout.label(level, scene),
                     layout.exr(level, scene),
+                    layout.transmission(level, scene),
                     layout.visible_label(level, scene),
                 ]
         if scene not in keep_scenes:
@@ -458,6 +461,8 @@ def file_problem(path: Path, scene: str, size: tuple[int, int]) -> str | None:
         return fileio.check_exr(path, size, {"R", "G", "B"})
     if kind == "depth":
         return fileio.check_exr(path, size, {"Z"})
+    if kind == "transmission":
+        return fileio.check_exr(path, size, set(TRANSMISSION_CHANNELS))
     if kind in ("labels", "labels_visible"):
         return check_label(path)
     return fileio.check_json(path)

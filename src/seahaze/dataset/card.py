@@ -243,6 +243,11 @@ def _files(data: dict[str, Any]) -> str:
         ("coco/<level>.json", "COCO ground truth of the level (category_id = class + 1)"),
         ("depth/<scene>.exr", "float32 distance along each pixel's ray (m), inf for sky"),
         ("exr/<level>/<scene>.exr", "linear RGB radiance, float32 (when rendered with EXR)"),
+        (
+            "transmission/<level>/<scene>.exr",
+            "per-pixel transmittance, optical depth and effective visibility of a hazy level, "
+            "float32 (with the EXRs)",
+        ),
         ("meta/<scene>.json", "camera, sun, sea, haze, per-vessel distance and contrast"),
     ]
     table = "\n".join(f"{name:<28}  # {what}" for name, what in rows)

@@ -6,6 +6,7 @@ OUT/labels/<level>/<scene>.txt     OUT/depth/<scene>.exr
 OUT/exr/<level>/<scene>.exr        OUT/meta/<scene>.json
 OUT/coco/<level>.json              OUT/README.md (the dataset card)
 OUT/labels_visible/<level>/<scene>.txt  OUT/coco_visible/<level>.json  (labels.write_visible)
+OUT/transmission/<level>/<scene>.exr  (hazy levels, with the EXRs: T, tau per channel, V_eff)
 OUT/train.txt OUT/val.txt OUT/test.txt (Ultralytics lists of the clean images; not with
                                       --split none)
 OUT/mot/<level>/<sequence>/gt/gt.txt  OUT/mot/<level>/<sequence>/seqinfo.ini  (sequences: a
@@ -18,6 +19,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..visibility import CLEAN_LEVEL
+
+TRANSMISSION_CHANNELS = ("T.R", "T.G", "T.B", "tau.R", "tau.G", "tau.B", "V_eff")
+"""Channels of a ``transmission/<level>/<scene>.exr`` (:mod:`seahaze.render.transmission`):
+transmittance and optical depth per channel and the effective visibility (m)."""
 
 
 @dataclass(frozen=True)
@@ -42,6 +47,10 @@ class Layout:
 
     def exr(self, level: str, scene: str) -> Path:
         return self.root / "exr" / level / f"{scene}.exr"
+
+    def transmission(self, level: str, scene: str) -> Path:
+        """A hazy level's per-pixel transmittance, optical depth and effective visibility."""
+        return self.root / "transmission" / level / f"{scene}.exr"
 
     def depth(self, scene: str) -> Path:
         return self.root / "depth" / f"{scene}.exr"
@@ -97,7 +106,8 @@ class Layout:
         self, scene: str, hazy_levels: list[str], exr: bool, visible: bool = False
     ) -> list[Path]:
         """Every file one scene writes: meta, depth, and per level (clean first) its image,
-        label, (with ``exr``) linear EXR and (with ``visible``, ``labels.write_visible``) its
+        label, (with ``exr``) linear EXR and, for a hazy level, its transmission EXR, and (with
+        ``visible``, ``labels.write_visible``) its
         visible-object label. Without ``visible`` the list is that of a dataset made before the
         option existed, so such a dataset's recorded digests still match."""
         files = [self.meta(scene), self.depth(scene)]
@@ -105,6 +115,8 @@ class Layout:
             files += [self.image(level, scene), self.label(level, scene)]
             if exr:
                 files.append(self.exr(level, scene))
+                if level != CLEAN_LEVEL:
+                    files.append(self.transmission(level, scene))
             if visible:
                 files.append(self.visible_label(level, scene))
         return files

@@ -3,7 +3,9 @@
 Images are the linear radiance exposed with the scene's one exposure and sRGB-encoded
 (:mod:`seahaze.imaging`), dithered as ``meta``'s ``render`` record says (``render.dither``:
 each image with its own seed, from the scene's seed, its name and the level; a record without
-it, the nearest code); with ``write_exr`` the linear radiance is written too. Every level gets
+it, the nearest code); with ``write_exr`` the linear radiance is written too, and each hazy
+level's per-pixel transmittance, optical depth and effective visibility
+(``transmission/<level>/``, :mod:`seahaze.render.transmission`). Every level gets
 the same label file: the boxes do not depend on the haze (the MSVD paper's protocol). With
 ``labels.write_visible`` each level also gets the labels of the vessels seen in its image
 (``labels_visible/<level>/``, :mod:`seahaze.visible`).
@@ -16,7 +18,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from .. import fileio, imaging
-from ..render.engine import SceneRender
+from ..render.engine import RenderedLevel, SceneRender
 from ..visibility import CLEAN_LEVEL
 from .layout import Layout
 
@@ -40,6 +42,10 @@ def write_scene(layout: Layout, scene: SceneRender) -> None:
     for level, text in (scene.visible_labels or {}).items():
         fileio.write_text(layout.visible_label(level, name), text)
     fileio.write_exr(layout.depth(name), {"Z": scene.geometry.distance_m})
+    if scene.write_exr:
+        for level in scene.levels:
+            if level.transmission is not None:
+                fileio.write_exr(layout.transmission(level.name, name), _channels(level))
     fileio.write_json(layout.meta(name), scene.meta)
 
 
@@ -53,3 +59,13 @@ def _write_image(
     fileio.write_png(layout.image(level, scene.name), image8)
     if scene.write_exr:
         fileio.write_rgb_exr(layout.exr(level, scene.name), radiance)
+
+
+def _channels(level: RenderedLevel) -> dict[str, np.ndarray]:
+    """A level's transmission maps as the channels of its EXR (``TRANSMISSION_CHANNELS``)."""
+    maps = level.transmission
+    assert maps is not None
+    channels = {f"T.{c}": maps.transmittance[..., i] for i, c in enumerate("RGB")}
+    channels |= {f"tau.{c}": maps.optical_depth[..., i] for i, c in enumerate("RGB")}
+    channels["V_eff"] = maps.visibility_eff_m
+    return channels

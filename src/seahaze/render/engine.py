@@ -20,14 +20,28 @@ import numpy as np
 
 from .. import annotate, imaging, labels, motion, visible
 from ..camera import Camera
+from ..medium import HazeMedium
 from ..seeds import RenderPass, render_seed
 from ..spec import SceneSpec
-from ..visibility import CLEAN_LEVEL, channel_extinction, extinction_coefficient, level_name
+from ..visibility import (
+    CLEAN_LEVEL,
+    Threshold,
+    channel_extinction,
+    extinction_coefficient,
+    level_name,
+)
 from ..world import SceneGeometry, build_geometry, frame_camera, layout_vessels, vessel_speeds
 from . import passes
 from .levels import LevelRenderer
 from .passes import Airlight, GeometryPass
 from .scene import PHYSICAL_SAMPLER, LoadedScene, build_scene
+from .transmission import (
+    LevelTransmission,
+    RayReach,
+    level_transmission,
+    ray_reach,
+    vessel_transmission,
+)
 from .variant import select_variant
 
 Progress = Callable[[str], None]
@@ -52,6 +66,8 @@ class RenderedLevel:
     """The horizon airlight (``asm`` only)."""
     denoised: np.ndarray | None = None
     """(H, W, 3) float32 denoised radiance (``render.denoise: on``), else None."""
+    transmission: LevelTransmission | None = None
+    """Its exact per-pixel transmittance, optical depth and effective visibility."""
 
     @property
     def image(self) -> np.ndarray:
@@ -340,8 +356,10 @@ def _assemble(
         )
         for name, image in [(CLEAN_LEVEL, clean), *((lv.name, lv.image) for lv in levels)]
     }
+    reach = ray_reach(geo, session.loaded.medium)
     level_meta = []
     for level in levels:
+        level.transmission = level_transmission(reach, level.sigma_rgb, level.visibility_m)
         horizon = annotate.horizon_luminance(level.image, geo.distance_m, elevation)
         if horizon is None and level.airlight is not None:
             horizon = float(imaging.luminance(level.airlight.rgb))
@@ -355,6 +373,10 @@ def _assemble(
             "sigma_per_m": extinction_coefficient(level.visibility_m, spec.haze.threshold),
             "sigma_rgb_per_m": level.sigma_rgb.tolist(),
             "horizon_luminance": horizon,
+            # The ray through the image's centre pixel (render.transmission).
+            "visibility_eff_centre_m": float(
+                level.transmission.visibility_eff_m[camera.height // 2, camera.width // 2]
+            ),
         }
         if level.airlight is not None:
             entry["airlight_rgb"] = level.airlight.rgb.tolist()
@@ -379,8 +401,15 @@ def _assemble(
             "box_half_width_m": session.loaded.box_half_width_m,
         },
         "levels": level_meta,
-        "vessels": annotate.vessel_meta(
-            geometry, boxes, geo.footprint_px, contrasts, local, spec.haze.threshold
+        "vessels": _with_transmission(
+            annotate.vessel_meta(
+                geometry, boxes, geo.footprint_px, contrasts, local, spec.haze.threshold
+            ),
+            levels,
+            reach,
+            geo,
+            session.loaded.medium,
+            spec.haze.threshold,
         ),
         "render": render_meta(spec),
     }
@@ -399,6 +428,30 @@ def _assemble(
         clean_denoised,
         _visible_labels(spec, boxes, local, camera),
     )
+
+
+def _with_transmission(
+    vessels: list[dict[str, Any]],
+    levels: list[RenderedLevel],
+    reach: RayReach,
+    geo: GeometryPass,
+    medium: HazeMedium,
+    threshold: Threshold | str,
+) -> list[dict[str, Any]]:
+    """``meta``'s vessels with, per hazy level, the transmittance over the pixels that show
+    each vessel and the optical depth to its centre (the middle of its air draft above its
+    waterline), at the level's nominal extinction (:func:`vessel_transmission`)."""
+    for entry in vessels:
+        x, y, waterline = entry["position_m"]
+        centre = np.array([x, y, waterline + 0.5 * entry["air_draft_m"]])
+        for level in levels:
+            sigma = extinction_coefficient(level.visibility_m, threshold)
+            entry["levels"][level.name].update(
+                vessel_transmission(
+                    reach, sigma, geo.instance, entry["index"], centre, geo.origin, medium
+                )
+            )
+    return vessels
 
 
 def _visible_labels(

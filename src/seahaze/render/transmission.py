@@ -1,0 +1,111 @@
+"""Exact per-pixel transmittance, optical depth and effective visibility of a hazy level.
+
+For the ray through a pixel's centre, from the camera to the first surface it meets, at
+distance ``d`` (m), the optical depth of level ``k`` is ``τ_k = σ_k ℓ`` with the reduced
+length ``ℓ = ∫₀ᵈ ρ ds`` (m) of the haze medium (:meth:`seahaze.medium.HazeMedium.path_length`,
+in closed form for every medium of that interface: no Monte Carlo noise), ``σ_k`` the level's
+extinction per channel (1/m). Its transmittance is ``T_k = exp(−τ_k)`` (Beer–Lambert).
+
+Effective visibility
+    The visibility a uniform haze would need to give the same transmittance over the same
+    distance: ``V_eff = −ln(ε)·d / τ`` with ``ε`` the level's contrast threshold (0.02:
+    ``−ln ε = 3.912``) and ``τ`` the optical depth at the level's nominal extinction
+    ``σ = −ln(ε)/V`` (:mod:`seahaze.visibility`), so ``V_eff = V·d/ℓ``. In a homogeneous slab
+    containing the ray ``ℓ = d`` and ``V_eff = V``; a ray climbing out of a fog layer sees
+    farther (``V_eff > V``).
+
+The sky
+    A sky pixel has no surface: its ray is followed for :data:`SKY_REACH_M`, which its ``d``,
+    ``τ``, ``T`` and ``V_eff`` all refer to (a ray that leaves the haze before then counts the
+    clear air beyond it in ``d``).
+
+Float32
+    ``τ`` is stored as it is: ``T`` underflows to 0 in float32 past ``τ ≈ 103`` (a few km in
+    the densest levels), where ``τ`` still holds the exact value.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..medium import HazeMedium
+from .passes import GeometryPass
+
+SKY_REACH_M = 20_000.0
+"""How far a sky pixel's ray is followed (m): 5 × the clearest graded visibility (4000 m),
+where every graded level's transmittance of a horizontal ray is below 3e-9."""
+
+
+@dataclass(frozen=True)
+class RayReach:
+    """The rays of one scene's pixels through its haze medium: shared by every level."""
+
+    distance_m: np.ndarray
+    """(H, W) float64 ``d``: the distance to the surface, :data:`SKY_REACH_M` for the sky."""
+    reduced_m: np.ndarray
+    """(H, W) float64 ``ℓ = ∫₀ᵈ ρ ds`` (m)."""
+
+
+@dataclass(frozen=True)
+class LevelTransmission:
+    """One level's per-pixel maps (what ``transmission/<level>/<scene>.exr`` holds)."""
+
+    optical_depth: np.ndarray
+    """(H, W, 3) float32 ``τ`` per channel R, G, B (dimensionless)."""
+    transmittance: np.ndarray
+    """(H, W, 3) float32 ``T = exp(−τ)`` per channel."""
+    visibility_eff_m: np.ndarray
+    """(H, W) float32 ``V_eff`` (m); ``inf`` where the ray meets no haze."""
+
+
+def ray_reach(geometry: GeometryPass, medium: HazeMedium) -> RayReach:
+    """Distance and reduced length of every pixel-centre ray of ``geometry`` in ``medium``."""
+    distance = np.where(
+        np.isfinite(geometry.distance_m), geometry.distance_m.astype(np.float64), SKY_REACH_M
+    )
+    reduced = medium.path_length(float(geometry.origin[2]), geometry.directions[..., 2], distance)
+    return RayReach(distance, np.asarray(reduced, np.float64))
+
+
+def level_transmission(
+    reach: RayReach, sigma_rgb: np.ndarray, visibility_m: float
+) -> LevelTransmission:
+    """The maps of a level of extinction ``sigma_rgb`` (3,) in 1/m and nominal visibility
+    ``visibility_m`` (m) for the rays of ``reach``."""
+    tau = reach.reduced_m[..., None] * np.asarray(sigma_rgb, np.float64)
+    with np.errstate(divide="ignore"):
+        v_eff = np.where(
+            reach.reduced_m > 0.0, visibility_m * reach.distance_m / reach.reduced_m, np.inf
+        )
+    return LevelTransmission(
+        tau.astype(np.float32), np.exp(-tau).astype(np.float32), v_eff.astype(np.float32)
+    )
+
+
+def vessel_transmission(
+    reach: RayReach,
+    sigma_per_m: float,
+    instance: np.ndarray,
+    vessel_index: int,
+    centre_m: np.ndarray,
+    camera_m: np.ndarray,
+    medium: HazeMedium,
+) -> dict[str, Any]:
+    """One vessel's entries at a level of nominal extinction ``sigma_per_m`` (1/m): the mean
+    and least transmittance over the pixels that show it (its instance mask, which its box
+    bounds; None when no pixel does) and the optical depth of the straight ray from the camera
+    at ``camera_m`` to its centre ``centre_m`` (world frame, m)."""
+    shown = reach.reduced_m[instance == vessel_index]
+    t = np.exp(-sigma_per_m * shown)
+    ray = np.asarray(centre_m, np.float64) - np.asarray(camera_m, np.float64)
+    distance = float(np.linalg.norm(ray))
+    direction_z = np.array([ray[2] / distance]) if distance > 0.0 else np.array([0.0])
+    to_centre = medium.path_length(float(camera_m[2]), direction_z, np.array([distance]))
+    return {
+        "transmittance_mean": float(t.mean()) if t.size else None,
+        "transmittance_min": float(t.min()) if t.size else None,
+        "optical_depth_centre": float(sigma_per_m * to_centre[0]),
+    }
