@@ -283,6 +283,16 @@ class HazeMedium(ABC):
         _, length = self.reduced_length(oz, dz, np.asarray(distance_m, np.float64), NUMPY)
         return np.maximum(length, 0.0)
 
+    def ray_path_length(
+        self, origin: np.ndarray, directions: np.ndarray, distance_m: np.ndarray
+    ) -> np.ndarray:
+        """numpy: the reduced length (m) of rays from ``origin`` (3,) along unit
+        ``directions`` (..., 3) up to ``distance_m`` (...; ``inf``: the sky). A medium of
+        height alone needs only heights (:meth:`path_length`); one that varies across the sea
+        overrides it."""
+        dirs_z = np.asarray(directions)[..., 2]
+        return self.path_length(float(origin[2]), dirs_z, distance_m)
+
     def with_optics(self, albedo: float, g: float) -> HazeMedium:
         """The same shape with another single-scattering ``albedo`` and asymmetry ``g``
         (a dataclass medium gets this for free; another must override it)."""

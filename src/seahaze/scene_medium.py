@@ -5,7 +5,10 @@ from __future__ import annotations
 from typing import Any
 
 from .fog_layer import fog_layer_medium
+from .haze_field import Bank, Drift, HazeField, Patches
 from .medium import HazeMedium, HomogeneousSlab
+from .nonuniform import HorizontalView, nonuniform_haze
+from .seeds import Stream, stream_seed
 
 
 def haze_medium(haze: Any, camera_height_m: float | None = None) -> HazeMedium:
@@ -22,3 +25,36 @@ def haze_medium(haze: Any, camera_height_m: float | None = None) -> HazeMedium:
     return fog_layer_medium(
         fog.top_m, fog.edge_m, fog.above_ratio, haze.top_m, camera_height_m, albedo, g
     )
+
+
+def scene_haze_medium(spec: Any, camera: Any, frame: int | None = None) -> HazeMedium:
+    """The medium of a whole scene (:class:`seahaze.spec.SceneSpec`) seen by ``camera``
+    (:class:`seahaze.camera.Camera`) at ``frame`` of its sequence (None: time 0): the
+    vertical profile of :func:`haze_medium`, times ``haze.patches`` and ``haze.bank`` where
+    the scene has them (:mod:`seahaze.nonuniform`), drifted to the frame's time and
+    normalised over the camera's view. Directions in the scene file are relative to the
+    camera's heading (``camera.heading_deg``, as the file gives it: a ship's turning does not
+    turn the fog); the bank's edge is measured from where the camera starts."""
+    haze = spec.haze
+    profile = haze_medium(haze, camera.height_m)
+    if haze.patches is None and haze.bank is None:
+        return profile
+    heading = float(spec.camera.heading_deg)
+    time_s = 0.0
+    if frame is not None and spec.sequence is not None:
+        time_s = frame / spec.sequence.fps
+    drift = Drift(haze.drift.speed_m_s, heading + haze.drift.toward_deg, time_s)
+    patches = None
+    if haze.patches is not None:
+        p = haze.patches
+        seed = stream_seed(spec.render.seed, Stream.HAZE_PATCHES)
+        patches = Patches(p.correlation_m, p.anisotropy, p.vertical_m, p.density_ratio, seed)
+    bank = None
+    if haze.bank is not None:
+        b = haze.bank
+        start = (0.0, 0.0)  # the camera's starting point: a still camera's, a ship's frame 0
+        bank = Bank(b.distance_m, heading + b.bearing_deg, b.edge_m, b.near_ratio, start)
+    view = HorizontalView(
+        camera.x_m, camera.y_m, camera.height_m, camera.heading_deg, camera.fov_deg
+    )
+    return nonuniform_haze(profile, HazeField(patches, bank, drift), view)

@@ -40,6 +40,9 @@ class Stream(IntEnum):
     # Images (seahaze.imaging)
     DITHER = 13
     """The dither of each PNG, per scene and level (``render.dither``)."""
+    # The haze (seahaze.haze_field)
+    HAZE_PATCHES = 14
+    """The lattice values of the haze's patches (``haze.patches``)."""
 
 
 class RenderPass(IntEnum):

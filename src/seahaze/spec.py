@@ -518,6 +518,98 @@ class FogLayerSpec(_Spec):
     )
 
 
+class PatchesSpec(_Spec):
+    """Patches of denser and thinner fog (seahaze.haze_field): fractal noise stretched along
+    the drift direction modulating the density, seeded by the scene's seed."""
+
+    correlation_m: float = Field(
+        300.0,
+        ge=20.0,
+        le=2000.0,
+        description="Correlation length of the patches along the drift direction (`drift`).",
+        json_schema_extra=_unit("m"),
+    )
+    anisotropy: float = Field(
+        3.0,
+        ge=1.0,
+        le=10.0,
+        description="How many times shorter the patches are across the drift direction than "
+        "along it (1: round).",
+        json_schema_extra=_unit("1"),
+    )
+    vertical_m: float = Field(
+        50.0,
+        ge=5.0,
+        le=500.0,
+        description="Vertical correlation length of the patches.",
+        json_schema_extra=_unit("m"),
+    )
+    density_ratio: float = Field(
+        10.0,
+        ge=1.0,
+        le=100.0,
+        description="Density of the densest part of the patches over the thinnest's.",
+        json_schema_extra=_unit("1"),
+    )
+
+
+class BankSpec(_Spec):
+    """A fog bank (seahaze.haze_field): dense haze beyond an edge at a distance and bearing
+    from the camera, thinner on the camera's side; it drifts with `drift`."""
+
+    distance_m: float = Field(
+        ...,
+        ge=50.0,
+        le=20000.0,
+        description="Horizontal distance from the camera to the bank's edge.",
+        json_schema_extra=_unit("m"),
+    )
+    bearing_deg: float = Field(
+        0.0,
+        ge=-90.0,
+        le=90.0,
+        description="Direction from the camera into the bank, relative to the camera's "
+        "heading (positive to the left, as vessels' bearings); a bank behind the camera would "
+        "not be in view.",
+        json_schema_extra=_unit("deg"),
+    )
+    edge_m: float = Field(
+        60.0,
+        ge=5.0,
+        le=2000.0,
+        description="Width scale of the bank's edge: the density goes 88 % of the way within "
+        "2 edge_m of it.",
+        json_schema_extra=_unit("m"),
+    )
+    near_ratio: float = Field(
+        0.15,
+        ge=0.01,
+        le=1.0,
+        description="Density on the camera's side of the edge relative to inside the bank.",
+        json_schema_extra=_unit("1"),
+    )
+
+
+class DriftSpec(_Spec):
+    """How the patches and the bank move with the wind in a sequence (`m(x − u t)`)."""
+
+    speed_m_s: float = Field(
+        0.0,
+        ge=0.0,
+        le=30.0,
+        description="Speed of the haze's drift.",
+        json_schema_extra=_unit("m/s"),
+    )
+    toward_deg: float = Field(
+        0.0,
+        ge=-180.0,
+        le=180.0,
+        description="Direction the haze drifts toward, relative to the camera's heading "
+        "(positive to the left); the patches are stretched along it.",
+        json_schema_extra=_unit("deg"),
+    )
+
+
 class HazeSpec(_Spec):
     """The haze whose extinction is set by the visibility of each level: a homogeneous layer
     up to `top_m`, or with `fog_layer` a fog layer under thinner haze."""
@@ -570,6 +662,34 @@ class HazeSpec(_Spec):
         description="A fog layer under thinner haze up to `top_m` (default none: the haze is "
         "homogeneous up to `top_m`). See docs/physics.md, 'A fog layer'.",
     )
+    patches: PatchesSpec | None = Field(
+        None,
+        description="Patches of denser and thinner fog across the sea (default none). With "
+        "`patches` or `bank` a level's visibility is that of the mean extinction along the "
+        "horizontal lines of sight at camera height over the view (docs/physics.md, 'Haze "
+        "that varies across the sea'); `render.mode` must be `asm` or `reference`.",
+    )
+    bank: BankSpec | None = Field(
+        None,
+        description="A fog bank beyond an edge (default none); combines with `patches` and "
+        "`fog_layer`.",
+    )
+    drift: DriftSpec = Field(
+        default_factory=DriftSpec,
+        description="How `patches` and `bank` move in a sequence (default still).",
+    )
+
+    @model_serializer(mode="wrap")
+    def _omit_uniform_across(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # Haze without patches or a bank keeps a recorded config byte-identical to before
+        # they existed.
+        data = handler(self)
+        for key in ("patches", "bank"):
+            if getattr(self, key) is None:
+                data.pop(key, None)
+        if self.drift == DriftSpec():
+            data.pop("drift", None)
+        return data
 
     @model_validator(mode="after")
     def _fog_below_the_top(self) -> HazeSpec:
@@ -1072,6 +1192,16 @@ class SceneSpec(_Spec):
             raise ValueError(
                 f"variation.camera_height_m [{varied[0]:g}, {varied[1]:g}] does not fit a "
                 f"sequence's mast; allowed: within {low:g}..{high:g} m"
+            )
+        return self
+
+    @model_validator(mode="after")
+    def _varying_haze_needs_a_mode_that_renders_it(self) -> SceneSpec:
+        varies = self.haze.patches is not None or self.haze.bank is not None
+        if varies and self.render.mode == "physical":
+            raise ValueError(
+                "haze.patches and haze.bank need render.mode asm or reference: the physical "
+                "mode renders haze that varies with height alone; allowed: asm, reference"
             )
         return self
 

@@ -21,6 +21,7 @@ import numpy as np
 from .. import annotate, imaging, labels, motion, visible
 from ..camera import Camera
 from ..medium import HazeMedium
+from ..scene_medium import scene_haze_medium
 from ..seeds import RenderPass, render_seed
 from ..spec import SceneSpec
 from ..visibility import (
@@ -199,6 +200,7 @@ def open_session(
             black_vessels=black_vessels,
             haze_box=spec.render.mode != "physical",
             reach_m=reach_m,
+            medium=scene_haze_medium(spec, camera, frame),
         )
     with _timed(timings, "aov"):
         pixels = passes.render_geometry(loaded)

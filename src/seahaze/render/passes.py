@@ -49,7 +49,7 @@ class GeometryPass:
         """(H, W) reduced length (m) of each pixel-centre ray in ``medium`` up to its surface
         (:meth:`seahaze.medium.HazeMedium.path_length`): a level's per-pixel optical depth is
         its extinction times this."""
-        return medium.path_length(float(self.origin[2]), self.directions[..., 2], self.distance_m)
+        return medium.ray_path_length(self.origin, self.directions, self.distance_m)
 
 
 def render_geometry(loaded: LoadedScene) -> GeometryPass:

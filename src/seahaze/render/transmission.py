@@ -32,11 +32,13 @@ from typing import Any
 import numpy as np
 
 from ..medium import HazeMedium
+from ..nonuniform import RAY_REACH_M
 from .passes import GeometryPass
 
-SKY_REACH_M = 20_000.0
+SKY_REACH_M = RAY_REACH_M
 """How far a sky pixel's ray is followed (m): 5 × the clearest graded visibility (4000 m),
-where every graded level's transmittance of a horizontal ray is below 3e-9."""
+where every graded level's transmittance of a horizontal ray is below 3e-9 (the reach of a
+haze that varies across the sea too)."""
 
 
 @dataclass(frozen=True)
@@ -66,7 +68,7 @@ def ray_reach(geometry: GeometryPass, medium: HazeMedium) -> RayReach:
     distance = np.where(
         np.isfinite(geometry.distance_m), geometry.distance_m.astype(np.float64), SKY_REACH_M
     )
-    reduced = medium.path_length(float(geometry.origin[2]), geometry.directions[..., 2], distance)
+    reduced = medium.ray_path_length(geometry.origin, geometry.directions, distance)
     return RayReach(distance, np.asarray(reduced, np.float64))
 
 
@@ -102,8 +104,8 @@ def vessel_transmission(
     t = np.exp(-sigma_per_m * shown)
     ray = np.asarray(centre_m, np.float64) - np.asarray(camera_m, np.float64)
     distance = float(np.linalg.norm(ray))
-    direction_z = np.array([ray[2] / distance]) if distance > 0.0 else np.array([0.0])
-    to_centre = medium.path_length(float(camera_m[2]), direction_z, np.array([distance]))
+    direction = ray / distance if distance > 0.0 else np.array([1.0, 0.0, 0.0])
+    to_centre = medium.ray_path_length(camera_m, direction[None, :], np.array([distance]))
     return {
         "transmittance_mean": float(t.mean()) if t.size else None,
         "transmittance_min": float(t.min()) if t.size else None,

@@ -1,0 +1,325 @@
+"""Haze that varies across the sea: a vertical profile times patches and a bank.
+
+The medium (:class:`NonUniformHaze`) has the relative density
+``ρ(x, y, z) = c · ρ_v(z) · m(x, y, z)``: ``ρ_v`` a vertical profile of
+:mod:`seahaze.medium` (a homogeneous slab or a fog layer, 1 at the camera's height), ``m`` the
+drifting patches and bank of :mod:`seahaze.haze_field`, and ``c`` the normalisation that keeps
+a level's meaning.
+
+What a level means
+    ``c`` makes the mean of ``ρ`` over the *view's horizontal fan* equal 1: the horizontal
+    lines of sight at the camera's height across the image's horizontal field of view, from
+    the camera out to :data:`VIEW_REACH_M`, averaged over azimuth and distance alike. So a
+    level's ``σ = 3.912/V`` is the mean extinction along the horizontal line of sight at
+    camera height over the view, and a patchy or banked scene at ``V`` holds as much haze in
+    view as the uniform one (docs/physics.md, "Haze that varies across the sea").
+
+Optical depths
+    Along a ray the reduced length ``ℓ = ∫ ρ ds`` has no closed form: it is integrated by
+    composite three-point Gauss–Legendre quadrature over the part of the ray between the
+    profile's bottom and top, in panels no longer than the field's smallest scale
+    (:meth:`seahaze.haze_field.HazeField.smallest_scale_m`) and than a quarter of a fog edge's
+    thickness along the ray: deterministic, no Monte Carlo noise (``asm``, the
+    ``transmission/`` maps and ``meta``). ``tests/test_nonuniform.py`` holds it to adaptive
+    quadrature within 1e-4.
+
+Modes
+    ``asm`` composites with these per-pixel optical depths; ``reference`` path-traces a
+    heterogeneous Mitsuba medium over a grid of the density (:data:`GRID_SHAPE` cells over the
+    haze box, linearly interpolated: its resolution limits how small a patch it resolves). The
+    ``physical`` mode's estimators rest on a density that varies with height alone and do not
+    render this medium (the scene file is refused with that reason).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass, replace
+from dataclasses import field as dataclass_field
+from typing import Any
+
+import numpy as np
+
+from .haze_field import HazeField
+from .medium import NUMPY, ArrayOps, HazeMedium
+
+RAY_REACH_M = 20_000.0
+"""How far a ray is followed (m; the sky's rays end here): every graded level's transmittance
+of a horizontal ray is below 3e-9 by then (as :data:`seahaze.render.transmission.SKY_REACH_M`)."""
+VIEW_REACH_M = 4000.0
+"""How far the view's horizontal fan reaches for the normalisation (m): the clearest graded
+visibility."""
+FAN_AZIMUTHS = 64
+"""Azimuths of the view's horizontal fan (midpoints across the field of view)."""
+GRID_SHAPE = (32, 384, 384)
+"""The ``reference`` mode's grid of the density (z, y, x cells over the haze box)."""
+GAUSS_NODES = np.array([-math.sqrt(0.6), 0.0, math.sqrt(0.6)])
+GAUSS_WEIGHTS = np.array([5.0, 8.0, 5.0]) / 9.0
+MAX_POINTS_PER_CHUNK = 1 << 22
+"""Quadrature points evaluated at once (memory: a few hundred MB at most)."""
+
+
+@dataclass(frozen=True)
+class HorizontalView:
+    """The camera's horizontal fan: its position (m) and the azimuths it sees (deg)."""
+
+    x_m: float
+    y_m: float
+    height_m: float
+    heading_deg: float
+    fov_deg: float
+
+
+@dataclass(frozen=True)
+class NonUniformHaze(HazeMedium):
+    """``c · ρ_v(z) · m(x, y, z)`` (module docstring). Vertical questions (bounds, optics)
+    are the profile's; ``reduced_length`` and friends, which assume a density that varies
+    with height alone, are not available (the ``physical`` mode is refused)."""
+
+    profile: HazeMedium
+    field: HazeField
+    scale: float = 1.0
+    # The reference grid and the last rays' path lengths (not part of the medium's identity).
+    _grid_cache: dict[str, np.ndarray] = dataclass_field(
+        default_factory=dict, compare=False, repr=False
+    )
+
+    @property
+    def albedo(self) -> float:  # type: ignore[override]
+        return self.profile.albedo
+
+    @property
+    def g(self) -> float:  # type: ignore[override]
+        return self.profile.g
+
+    @property
+    def bottom(self) -> float:  # type: ignore[override]
+        return self.profile.bottom
+
+    @property
+    def top(self) -> float:  # type: ignore[override]
+        return self.profile.top
+
+    def with_optics(self, albedo: float, g: float) -> HazeMedium:
+        return replace(self, profile=self.profile.with_optics(albedo, g), _grid_cache={})
+
+    # -- the density and optical depths ------------------------------------------------------
+    def density_at(self, x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
+        """``ρ`` at world points (m), float64."""
+        vertical = np.asarray(self.profile.density(np.asarray(z, np.float64), NUMPY))
+        return self.scale * vertical * self.field.modulation(x, y, z)
+
+    def ray_path_length(
+        self, origin: np.ndarray, directions: np.ndarray, distance_m: np.ndarray
+    ) -> np.ndarray:
+        """``∫₀ᵈ ρ ds`` (m) of rays from ``origin`` (3,) along unit ``directions`` (..., 3) to
+        ``distance_m`` (...; at most :data:`RAY_REACH_M`, the sky's ``inf`` included):
+        composite Gauss–Legendre (module docstring). The last results are kept: every level
+        of a scene asks for the same rays."""
+        origin = np.asarray(origin, np.float64)
+        directions = np.asarray(directions, np.float64)
+        shape = directions.shape[:-1]
+        dist = np.minimum(np.broadcast_to(np.asarray(distance_m, np.float64), shape), RAY_REACH_M)
+        key = _digest(origin, directions, dist)
+        if key not in self._grid_cache:
+            if len(self._grid_cache) > 4:
+                self._grid_cache.clear()
+            self._grid_cache[key] = self._path_lengths(origin, directions, dist)
+        return self._grid_cache[key].copy()
+
+    def _path_lengths(
+        self, origin: np.ndarray, directions: np.ndarray, distance_m: np.ndarray
+    ) -> np.ndarray:
+        shape = directions.shape[:-1]
+        d = directions.reshape(-1, 3)
+        dist = distance_m.reshape(-1)
+        oz = np.full(len(d), float(origin[2]))
+        enter, leave = self.profile.span(oz, d[:, 2], NUMPY)
+        leave = np.minimum(leave, dist)
+        length = np.maximum(leave - enter, 0.0)
+        panels = np.ceil(length / self._panel_length(d[:, 2])).astype(np.int64)
+        out = np.zeros(len(d))
+        # Rays grouped by a power-of-two panel count: one array shape per group.
+        counts = np.where(panels > 0, 2 ** np.ceil(np.log2(np.maximum(panels, 1))), 0)
+        for count in np.unique(counts[counts > 0]).astype(np.int64):
+            rays = np.flatnonzero(counts == count)
+            per_chunk = max(1, MAX_POINTS_PER_CHUNK // (3 * int(count)))
+            for start in range(0, len(rays), per_chunk):
+                chosen = rays[start : start + per_chunk]
+                out[chosen] = self._integrate(
+                    np.asarray(origin, np.float64), d[chosen], enter[chosen], length[chosen], count
+                )
+        return out.reshape(shape)
+
+    def _panel_length(self, dz: np.ndarray) -> np.ndarray:
+        """Longest panel along a ray with direction z component ``dz`` (m)."""
+        along = self.field.smallest_scale_m()
+        edge = getattr(self.profile, "edge", math.inf)  # a fog layer's top edge (m)
+        vertical = 0.25 * edge / np.maximum(np.abs(dz), 1e-12)
+        return np.minimum(np.minimum(along, vertical), VIEW_REACH_M / 8.0)
+
+    def _integrate(
+        self,
+        origin: np.ndarray,
+        d: np.ndarray,
+        enter: np.ndarray,
+        length: np.ndarray,
+        panels: int,
+    ) -> np.ndarray:
+        """Composite 3-point Gauss–Legendre over ``panels`` equal panels of each ray's
+        ``[enter, enter + length]``."""
+        width = length / panels  # (rays,)
+        mids = (np.arange(panels) + 0.5)[None, :] * width[:, None]  # (rays, panels)
+        s = enter[:, None, None] + mids[..., None] + 0.5 * width[:, None, None] * GAUSS_NODES
+        p = origin[None, None, None, :] + s[..., None] * d[:, None, None, :]
+        rho = self.density_at(p[..., 0], p[..., 1], p[..., 2])
+        return 0.5 * width * np.einsum("rpk,k->r", rho, GAUSS_WEIGHTS)
+
+    def path_length(self, origin_z: float, dirs_z: np.ndarray, distance_m: np.ndarray):
+        raise NotImplementedError(
+            "a haze that varies across the sea needs whole rays: use ray_path_length"
+        )
+
+    # -- the reference mode's Mitsuba medium ---------------------------------------------------
+    def mitsuba_medium(self, box_min: np.ndarray, box_max: np.ndarray) -> dict[str, Any]:
+        """A ``heterogeneous`` medium over a grid of the density at the centres of
+        :data:`GRID_SHAPE` cells over the haze box (world corners ``box_min``, ``box_max``,
+        m), trilinearly interpolated; its extinction 0 until a level sets it."""
+        import mitsuba as mi
+
+        box_min, box_max = np.asarray(box_min, np.float64), np.asarray(box_max, np.float64)
+        grid = self.density_grid_over(box_min, box_max, GRID_SHAPE)
+        self._grid_cache["rho"] = grid
+        to_world = (
+            mi.ScalarTransform4f().translate(box_min.tolist()).scale((box_max - box_min).tolist())
+        )
+        return {
+            "type": "heterogeneous",
+            "albedo": self.albedo,
+            "sigma_t": {
+                "type": "gridvolume",
+                "grid": mi.VolumeGrid(_with_rgb(grid, np.zeros(3))),
+                "filter_type": "trilinear",
+                "to_world": to_world,
+            },
+            "scale": 1.0,
+            "phase": {"type": "hg", "g": self.g},
+        }
+
+    def mitsuba_level(self, sigma_rgb: np.ndarray, albedo: float, g: float) -> dict[str, Any]:
+        import mitsuba as mi
+
+        if "rho" not in self._grid_cache:
+            raise ValueError("the grid covers the haze box: call mitsuba_medium first")
+        data = _with_rgb(self._grid_cache["rho"], np.asarray(sigma_rgb, np.float64))
+        return {
+            "sigma_t.data": mi.TensorXf(data),
+            "albedo.value.value": albedo,
+            "phase_function.g": g,
+        }
+
+    def density_grid_over(
+        self, box_min: np.ndarray, box_max: np.ndarray, shape: tuple[int, int, int]
+    ) -> np.ndarray:
+        """(z, y, x) float32: the density at the centres of ``shape`` cells over the box from
+        ``box_min`` to ``box_max`` (world corners, m)."""
+        axes = [
+            lo + (np.arange(n) + 0.5) / n * (hi - lo)
+            for lo, hi, n in zip(box_min[::-1], box_max[::-1], shape, strict=True)
+        ]
+        grid = np.empty(shape, np.float32)
+        for k, z in enumerate(axes[0]):  # a slab of cells at a time: bounded memory
+            y, x = np.meshgrid(axes[1], axes[2], indexing="ij")
+            grid[k] = self.density_at(x, y, np.full_like(x, z))
+        return grid
+
+    def describe(self) -> dict[str, Any]:
+        field = self.field
+        out = {**self.profile.describe(), "kind": "NonUniformHaze", "density_scale": self.scale}
+        out["profile"] = type(self.profile).__name__
+        if field.patches is not None:
+            p = field.patches
+            out["patches"] = {
+                "correlation_m": p.correlation_m,
+                "anisotropy": p.anisotropy,
+                "vertical_m": p.vertical_m,
+                "density_ratio": p.density_ratio,
+                "seed": p.seed,
+            }
+        if field.bank is not None:
+            b = field.bank
+            out["bank"] = {
+                "distance_m": b.distance_m,
+                "toward_deg": b.toward_deg,
+                "edge_m": b.edge_m,
+                "near_ratio": b.near_ratio,
+                "origin_xy_m": list(b.origin_xy),
+            }
+        out["drift"] = {
+            "speed_m_s": field.drift.speed_m_s,
+            "toward_deg": field.drift.toward_deg,
+            "time_s": field.drift.time_s,
+        }
+        return out
+
+    # -- what a density of height alone would answer: not this medium's ----------------------
+    @property
+    def reduced_is_geometric(self) -> bool:
+        return False
+
+    @property
+    def reduced_top_m(self) -> float:
+        raise NotImplementedError(_PHYSICAL)
+
+    def reduced_height(self, z: Any, ops: ArrayOps) -> Any:
+        raise NotImplementedError(_PHYSICAL)
+
+    def distance_at(self, oz: Any, dz: Any, enter: Any, reduced: Any, ops: ArrayOps) -> Any:
+        raise NotImplementedError(_PHYSICAL)
+
+    def density(self, z: Any, ops: ArrayOps) -> Any:
+        raise NotImplementedError("the density varies across the sea: use density_at")
+
+    def span(self, oz: Any, dz: Any, ops: ArrayOps) -> tuple[Any, Any]:
+        return self.profile.span(oz, dz, ops)
+
+    def reduced_length(self, oz: Any, dz: Any, t_end: Any, ops: ArrayOps) -> tuple[Any, Any]:
+        raise NotImplementedError(_PHYSICAL)
+
+
+_PHYSICAL = "the physical mode renders haze that varies with height alone"
+
+
+def _digest(*arrays: np.ndarray) -> str:
+    """A key for the rays of :meth:`NonUniformHaze.ray_path_length`'s cache."""
+    h = hashlib.blake2b(digest_size=16)
+    for a in arrays:
+        h.update(np.ascontiguousarray(a).tobytes())
+        h.update(str(a.shape).encode())
+    return h.hexdigest()
+
+
+def _with_rgb(grid: np.ndarray, rgb: np.ndarray) -> np.ndarray:
+    """A density grid (z, y, x) times per-channel ``rgb``: Mitsuba's (z, y, x, 3) layout."""
+    return (grid[..., None] * rgb.astype(np.float32)).astype(np.float32)
+
+
+def fan_mean(medium: NonUniformHaze, view: HorizontalView) -> float:
+    """The mean of ``medium``'s density over the view's horizontal fan (module docstring):
+    midpoints of :data:`FAN_AZIMUTHS` azimuths × distance steps no longer than half the
+    field's smallest scale, out to :data:`VIEW_REACH_M`."""
+    across = (np.arange(FAN_AZIMUTHS) + 0.5) / FAN_AZIMUTHS - 0.5
+    azimuths = view.heading_deg + view.fov_deg * across
+    steps = max(512, math.ceil(VIEW_REACH_M / (0.5 * medium.field.smallest_scale_m())))
+    r = (np.arange(steps) + 0.5) / steps * VIEW_REACH_M
+    az = np.radians(azimuths)[:, None]
+    x, y = view.x_m + r * np.cos(az), view.y_m + r * np.sin(az)
+    z = np.full_like(x, view.height_m)
+    return float(np.mean(medium.density_at(x, y, z)))
+
+
+def nonuniform_haze(profile: HazeMedium, field: HazeField, view: HorizontalView) -> NonUniformHaze:
+    """The medium whose mean density over ``view``'s horizontal fan is 1."""
+    raw = NonUniformHaze(profile, field, 1.0)
+    return NonUniformHaze(profile, field, 1.0 / fan_mean(raw, view))
