@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 from .fog_layer import fog_layer_medium
 from .haze_field import Bank, Drift, HazeField, Patches
 from .medium import HazeMedium, HomogeneousSlab
-from .nonuniform import HorizontalView, nonuniform_haze
+from .nonuniform import HorizontalView, NonUniformHaze, nonuniform_haze
 from .seeds import Stream, stream_seed
 
 
@@ -31,8 +32,9 @@ def scene_haze_medium(spec: Any, camera: Any, frame: int | None = None) -> HazeM
     """The medium of a whole scene (:class:`seahaze.spec.SceneSpec`) seen by ``camera``
     (:class:`seahaze.camera.Camera`) at ``frame`` of its sequence (None: time 0): the
     vertical profile of :func:`haze_medium`, times ``haze.patches`` and ``haze.bank`` where
-    the scene has them (:mod:`seahaze.nonuniform`), drifted to the frame's time and
-    normalised over the camera's view. Directions in the scene file are relative to the
+    the scene has them (:mod:`seahaze.nonuniform`), drifted to the frame's time; normalised
+    at time 0 over the view of the camera the file describes (from the origin), so that in a
+    sequence the field only moves. Directions in the scene file are relative to the
     camera's heading (``camera.heading_deg``, as the file gives it: a ship's turning does not
     turn the fog); the bank's edge is measured from where the camera starts."""
     haze = spec.haze
@@ -54,7 +56,9 @@ def scene_haze_medium(spec: Any, camera: Any, frame: int | None = None) -> HazeM
         b = haze.bank
         start = (0.0, 0.0)  # the camera's starting point: a still camera's, a ship's frame 0
         bank = Bank(b.distance_m, heading + b.bearing_deg, b.edge_m, b.near_ratio, start)
-    view = HorizontalView(
-        camera.x_m, camera.y_m, camera.height_m, camera.heading_deg, camera.fov_deg
-    )
-    return nonuniform_haze(profile, HazeField(patches, bank, drift), view)
+    # The level's normalisation is the field's at time 0 over the view of the camera as the
+    # file gives it: in a sequence the field then only moves, frame to frame.
+    cam = spec.camera
+    view = HorizontalView(0.0, 0.0, cam.height_m, cam.heading_deg, cam.fov_deg)
+    start = nonuniform_haze(profile, HazeField(patches, bank, replace(drift, time_s=0.0)), view)
+    return NonUniformHaze(profile, HazeField(patches, bank, drift), start.scale)
