@@ -134,15 +134,22 @@ class HazeField:
         return m
 
     def smallest_scale_m(self) -> float:
-        """The shortest length over which ``m`` changes (m): what a quadrature must resolve."""
-        scales = [math.inf]
+        """The shortest length over which ``m`` changes (m), horizontally or vertically."""
+        return min(self.scales_m())
+
+    def scales_m(self) -> tuple[float, float]:
+        """The shortest horizontal and vertical lengths over which ``m`` changes (m): what a
+        quadrature must resolve (the finest octave of the patches across the drift and in
+        height, the bank's edge)."""
+        horizontal = vertical = math.inf
         if self.patches is not None:
             finest = 2.0 ** (OCTAVES - 1)
             p = self.patches
-            scales += [p.correlation_m / p.anisotropy / finest, p.vertical_m / finest]
+            horizontal = p.correlation_m / p.anisotropy / finest
+            vertical = p.vertical_m / finest
         if self.bank is not None:
-            scales.append(self.bank.edge_m)
-        return min(scales)
+            horizontal = min(horizontal, self.bank.edge_m)
+        return horizontal, vertical
 
 
 def fractal_noise(qx: np.ndarray, qy: np.ndarray, qz: np.ndarray, seed: int) -> np.ndarray:

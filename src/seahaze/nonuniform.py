@@ -17,11 +17,11 @@ What a level means
 Optical depths
     Along a ray the reduced length ``ℓ = ∫ ρ ds`` has no closed form: it is integrated by
     composite three-point Gauss–Legendre quadrature over the part of the ray between the
-    profile's bottom and top, in panels no longer than the field's smallest scale
-    (:meth:`seahaze.haze_field.HazeField.smallest_scale_m`) and than a quarter of a fog edge's
-    thickness along the ray: deterministic, no Monte Carlo noise (``asm``, the
-    ``transmission/`` maps and ``meta``). ``tests/test_nonuniform.py`` holds it to adaptive
-    quadrature within 1e-4.
+    profile's bottom and top, in panels no longer than the field's horizontal scale, nor than
+    its vertical scale and a quarter of a fog edge's thickness over the ray's climb per metre
+    (:meth:`seahaze.haze_field.HazeField.scales_m`): deterministic, no Monte Carlo noise
+    (``asm``, the ``transmission/`` maps and ``meta``). ``tests/test_nonuniform.py`` holds it
+    to Simpson's rule on 0.1 m steps within 1e-4.
 
 Modes
     ``asm`` composites with these per-pixel optical depths; ``reference`` path-traces a
@@ -56,8 +56,8 @@ GRID_SHAPE = (32, 384, 384)
 """The ``reference`` mode's grid of the density (z, y, x cells over the haze box)."""
 GAUSS_NODES = np.array([-math.sqrt(0.6), 0.0, math.sqrt(0.6)])
 GAUSS_WEIGHTS = np.array([5.0, 8.0, 5.0]) / 9.0
-MAX_POINTS_PER_CHUNK = 1 << 22
-"""Quadrature points evaluated at once (memory: a few hundred MB at most)."""
+MAX_POINTS_PER_CHUNK = 1 << 20
+"""Quadrature points evaluated at once (about 0.3 GB of temporaries)."""
 
 
 @dataclass(frozen=True)
@@ -153,11 +153,14 @@ class NonUniformHaze(HazeMedium):
         return out.reshape(shape)
 
     def _panel_length(self, dz: np.ndarray) -> np.ndarray:
-        """Longest panel along a ray with direction z component ``dz`` (m)."""
-        along = self.field.smallest_scale_m()
+        """Longest panel along a ray with direction z component ``dz`` (m): the field's
+        horizontal scale, its vertical scale and a quarter of a fog layer's edge over the
+        height the ray climbs per metre."""
+        horizontal, vertical = self.field.scales_m()
         edge = getattr(self.profile, "edge", math.inf)  # a fog layer's top edge (m)
-        vertical = 0.25 * edge / np.maximum(np.abs(dz), 1e-12)
-        return np.minimum(np.minimum(along, vertical), VIEW_REACH_M / 8.0)
+        climb = np.maximum(np.abs(dz), 1e-12)
+        panel = np.minimum(horizontal, np.minimum(vertical, 0.25 * edge) / climb)
+        return np.minimum(panel, VIEW_REACH_M / 8.0)
 
     def _integrate(
         self,

@@ -77,6 +77,17 @@ PHYSICAL_TABLE_S = {50.0: 0.57, 300.0: 0.26, 4000.0: 0.21}
 REFERENCE_CORE_S = {50.0: 9.69e-06, 300.0: 6.56e-06, 4000.0: 3.11e-06}
 ASM_LEVEL_S = {50.0: 1.31, 300.0: 0.91, 4000.0: 0.67}
 
+# measured on this 2-vCPU machine with the path lengths of scenes/patchy.yaml and
+# scenes/fogbank.yaml at 320×180 (4.2e-7 and 4.4e-7 s a point; docs/limits.md); CPU seconds,
+# one core (numpy)
+FIELD_POINT_S = 4.3e-07
+"""One evaluation of a varying haze's density (the patches' noise and the bank)."""
+FIELD_RAY_M = 3200.0
+"""Mean length (m) of a pixel's ray that the quadrature covers, in horizontal scales."""
+FIELD_BYTES = 0.5 * 2**30
+"""Memory of the quadrature's temporaries (a chunk of points at a time) and its cached path
+lengths (measured: 0.47 GiB at 320×180)."""
+
 VALIDATED_FROM_M = {"physical": 100.0}
 """Thinnest visibility (m) down to which the mode is within 3 % of converged ``reference``
 renders in every region (docs/physics.md, "Validated range"; docs/benchmarks.md): ``physical``
@@ -184,6 +195,7 @@ def scene_core_seconds(spec: SceneSpec) -> tuple[float, float]:
     width, height = spec.camera.resolution
     pixels, spp, levels = width * height, spec.render.spp, spec.haze.levels
     serial = SETUP_CORE_S[spec.sea.quality] + pixels * (len(levels) + 1) * WRITE_CORE_S
+    serial += varying_haze_seconds(spec)
     mode = spec.render.mode
     if mode == "physical":
         # One pass gives the clean image and every level; each level adds a little to it
@@ -199,14 +211,42 @@ def scene_core_seconds(spec: SceneSpec) -> tuple[float, float]:
         tables = photons * sum(_interpolated(PHYSICAL_TABLE_S, v) for v in levels)
         return serial, parallel + tables
     parallel = pixels * spp * CLEAN_CORE_S
+    # Delta tracking through a grid samples at the densest cell's rate: patches whose density
+    # spans R cost about sqrt(R) times as many steps (measured 1.13x this at R = 30).
+    patches = spec.haze.patches
+    majorant = math.sqrt(patches.density_ratio) if patches is not None else 1.0
     for v in levels:
         if mode == "reference":
-            per, fixed = _interpolated(REFERENCE_CORE_S, v), 0.0
+            per, fixed = _interpolated(REFERENCE_CORE_S, v) * majorant, 0.0
         else:
             airlight = spec.render.airlight_spp / 1024.0
             per, fixed = 0.0, _interpolated(ASM_LEVEL_S, v) * airlight
         parallel += fixed + pixels * spp * per
     return serial, parallel
+
+
+def varying_haze_seconds(spec: SceneSpec) -> float:
+    """CPU seconds of the optical depths of haze that varies across the sea (``haze.patches``,
+    ``haze.bank``): once per scene, three Gauss points per panel of its horizontal scale
+    over :data:`FIELD_RAY_M` per pixel (:mod:`seahaze.nonuniform`), plus the ``reference``
+    mode's density grid; 0 for haze that varies with height alone."""
+    from ..haze_field import Bank, HazeField, Patches
+    from ..nonuniform import GRID_SHAPE
+
+    haze = spec.haze
+    if haze.patches is None and haze.bank is None:
+        return 0.0
+    p, b = haze.patches, haze.bank
+    field = HazeField(
+        None if p is None else Patches(p.correlation_m, p.anisotropy, p.vertical_m, 1.0, 0),
+        None if b is None else Bank(b.distance_m, 0.0, b.edge_m, b.near_ratio),
+    )
+    horizontal, _ = field.scales_m()
+    width, height = spec.camera.resolution
+    points = width * height * 3.0 * FIELD_RAY_M / horizontal
+    if spec.render.mode == "reference":
+        points += math.prod(GRID_SHAPE)
+    return points * FIELD_POINT_S
 
 
 def scene_bytes(spec: SceneSpec) -> int:
@@ -216,7 +256,8 @@ def scene_bytes(spec: SceneSpec) -> int:
     mode = spec.render.mode
     images = len(spec.haze.levels) + 1
     per_pixel = BYTES_PER_PIXEL[mode] + images * BYTES_PER_PIXEL_IMAGE[mode]
-    return int(BASE_BYTES[mode] + width * height * per_pixel)
+    varying = spec.haze.patches is not None or spec.haze.bank is not None
+    return int(BASE_BYTES[mode] + width * height * per_pixel + (FIELD_BYTES if varying else 0))
 
 
 def kernel_kind(spec: SceneSpec) -> str:
