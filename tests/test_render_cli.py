@@ -170,15 +170,21 @@ def test_preview_replaces_its_own_sheet_and_never_a_users_file(dataset, tmp_path
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
 
 
-def test_default_preview_in_the_dataset_keeps_a_users_preview_png(dataset, tmp_path, capsys):
+def test_the_default_preview_goes_beside_the_dataset_and_keeps_a_users_file(
+    dataset, tmp_path, capsys
+):
     import shutil
 
     root = tmp_path / "ds"
     shutil.copytree(dataset, root)
-    (root / "preview.png").write_bytes(b"my notes, not an image")
+    before = sorted(p.relative_to(root) for p in root.rglob("*"))
+    assert main(["preview", str(root), *PREVIEW_ARGS]) == 0
+    assert Image.open(tmp_path / "ds-preview.png").size == (128, 36)
+    assert sorted(p.relative_to(root) for p in root.rglob("*")) == before  # nothing inside
+    (tmp_path / "ds-preview.png").write_bytes(b"my notes, not an image")
     assert main(["preview", str(root), *PREVIEW_ARGS]) == 2
-    assert (root / "preview.png").read_bytes() == b"my notes, not an image"
-    assert "preview.png: a file seahaze did not write" in capsys.readouterr().err
+    assert (tmp_path / "ds-preview.png").read_bytes() == b"my notes, not an image"
+    assert "ds-preview.png: a file seahaze did not write" in capsys.readouterr().err
     other = tmp_path / "mine.png"
     assert main(["preview", str(root), *PREVIEW_ARGS, "--out", str(other)]) == 0
     assert Image.open(other).size == (128, 36)

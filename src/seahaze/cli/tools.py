@@ -63,7 +63,7 @@ def cmd_preview(args: argparse.Namespace) -> int:
         )
     except PreviewError as err:
         raise UsageError(str(err)) from None
-    out = Path(args.out) if args.out else root / "preview.png"
+    out = Path(args.out) if args.out else beside(root, "preview.png")
     try:
         check_overwrite(out)
         out.parent.mkdir(parents=True, exist_ok=True)
@@ -74,6 +74,13 @@ def cmd_preview(args: argparse.Namespace) -> int:
         raise UsageError(f"--out {out}: cannot write the contact sheet ({err})") from None
     print(f"wrote {out}")
     return 0
+
+
+def beside(root: Path, name: str) -> Path:
+    """``<root>-<name>`` next to the dataset folder ``root``: a preview's default place, out
+    of the dataset (whose files are seahaze's and an export's sources)."""
+    folder = root.resolve()
+    return folder.with_name(f"{folder.name}-{name}")
 
 
 def _preview_sequence(args: argparse.Namespace, root: Path, levels: list[str] | None) -> int:
@@ -88,7 +95,7 @@ def _preview_sequence(args: argparse.Namespace, root: Path, levels: list[str] | 
         save_mp4,
     )
 
-    out = Path(args.out) if args.out else root / f"{args.sequence}.gif"
+    out = Path(args.out) if args.out else beside(root, f"{args.sequence}.gif")
     suffix = out.suffix.lower()
     if suffix not in ANIMATION_FORMATS:
         allowed = " or ".join(ANIMATION_FORMATS)
@@ -155,7 +162,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     preview.add_argument(
         "--out",
         metavar="FILE",
-        help="output file (default: DIR/preview.png, DIR/NAME.gif); an existing file is "
+        help="output file (default beside the dataset, never in it: DIR-preview.png, "
+        "DIR-NAME.gif); an existing file is "
         "replaced only when it is a preview seahaze wrote, else choose another name",
     )
     preview.set_defaults(func=cmd_preview)
