@@ -248,15 +248,17 @@ def _png_at(path) -> np.ndarray:
 
 
 def test_dither_off_on_the_command_line_writes_the_nearest_code(tmp_path) -> None:
-    """``--dither off`` overrides the scene's default: meta records it and every PNG is the
-    nearest code of its EXR (the same render as the ``dataset`` fixture's, 64×36 at 2 spp)."""
+    """``--dither off`` overrides the scene's default: meta records it, the card's command
+    says it, and every PNG is the nearest code of its EXR (64×36 at 2 spp)."""
     scene = Path(__file__).resolve().parents[1] / "scenes" / "default.yaml"
     out = tmp_path / "off"
     args = ["render", str(scene), "--vis", "300", "--res", "64x36", "--spp", "2"]
-    code, _, err = cli_run([*args, "--out", str(out), "--dither", "off", "--quiet"])
+    code, _, err = cli_run([*args, "--out", str(out), "--dither", "off", "--quiet"], seconds=120)
     assert code == 0, err
     meta = json.loads((out / "meta" / "default.json").read_text())
     assert meta["render"]["dither"] == "off" and "dither_seed" not in meta["render"]
+    # The dataset card's equivalent command carries the switch the scene file does not.
+    assert "--mode physical --dither off" in (out / "README.md").read_text()
     for level in ("clean", "v0300"):
         radiance = fileio.read_exr(out / "exr" / level / "default.exr")["RGB"]
         expected = imaging.to_srgb8(radiance, meta["exposure"])

@@ -72,6 +72,13 @@ def equivalent_command(data: dict[str, Any]) -> str:
     width, height = config.get("resolution", [0, 0])
     parts += [f"--vis {levels}", f"--res {width}x{height}", f"--spp {config.get('spp')}"]
     parts.append(f"--mode {config.get('mode')}")
+    # Render switches a command line may have changed from the scene files' (first scene's).
+    first = next(iter(data["scenes"].values()), {}).get("config") or {}
+    render = first.get("render") or {}
+    if render.get("dither", "on") == "off":
+        parts.append("--dither off")
+    if render.get("denoise", "off") == "on":
+        parts.append("--denoise on")
     split = config.get("split")
     if split:
         parts.append("--split " + ",".join(f"{split[name]:g}" for name in SPLIT_NAMES))
