@@ -24,7 +24,7 @@ import pytest
 
 from conftest import cli_run
 from seahaze.metric import MetricInputError
-from seahaze.metric.ground_truth import copy_video_fields
+from seahaze.metric.ground_truth import copy_matched_fields
 
 pytestmark = pytest.mark.usefixtures("mitsuba_variant")
 
@@ -307,7 +307,7 @@ def test_coco_visible_carries_the_video_fields_and_track_ids_of_coco(fogseq):
             assert got == ([BOAT] if level == "v0300" else [SHIP, BOAT])
 
 
-def test_copy_video_fields_matches_by_box_and_refuses_a_box_labels_do_not_hold(tmp_path):
+def test_copy_matched_fields_matches_by_box_and_refuses_a_box_labels_do_not_hold(tmp_path):
     image = {"id": 1, "file_name": "images/v0300/s_f0000.png", "width": 64, "height": 36}
     ship = {"id": 1, "image_id": 1, "category_id": 1, "bbox": [30.0, 7.0, 18.0, 3.0]}
     boat = {"id": 2, "image_id": 1, "category_id": 5, "bbox": [9.0, 20.0, 22.0, 7.0]}
@@ -317,16 +317,16 @@ def test_copy_video_fields_matches_by_box_and_refuses_a_box_labels_do_not_hold(t
         "videos": [{"id": 1, "name": "s", "fps": 2.0, "frames": 1}],
     }
     seen = {"images": [dict(image)], "annotations": [boat | {"id": 1}]}
-    copy_video_fields(every, seen, tmp_path)
+    copy_matched_fields(every, seen, tmp_path)
     assert seen["images"][0] == every["images"][0]
     assert seen["annotations"] == [boat | {"id": 1, "track_id": 7}]
     assert seen["videos"] == every["videos"]
     stills = {"images": [dict(image)], "annotations": [dict(ship)]}
     before = json.dumps(stills)
-    copy_video_fields({"images": [image], "annotations": [ship]}, stills, tmp_path)
+    copy_matched_fields({"images": [image], "annotations": [ship]}, stills, tmp_path)
     assert json.dumps(stills) == before  # no sequence: nothing added
     # The boat's box before the ship's: not in the order of labels/, so no vessel of it.
     wrong = {"images": [dict(image)], "annotations": [boat | {"id": 1}, ship | {"id": 2}]}
     with pytest.raises(MetricInputError) as caught:
-        copy_video_fields(every, wrong, tmp_path)
+        copy_matched_fields(every, wrong, tmp_path)
     assert str(caught.value).startswith(f"{tmp_path / 's_f0000.txt'}: a box that the scene's")

@@ -136,3 +136,21 @@ def test_vessel_entries_follow_their_pixels_and_centre(slab_render):
             assert entry["transmittance_min"] == pytest.approx(t.min(), rel=1e-5)
             checked += 1
     assert checked >= 4
+
+
+def test_coco_annotations_carry_each_vessels_optics(dataset):
+    """Each COCO annotation of a hazy level holds its vessel's distance, transmittance and
+    optical depth from meta (the boxed vessels in index order: the label file's lines)."""
+    meta = json.loads((dataset / "meta" / "default.json").read_text())
+    boxed = sorted((v for v in meta["vessels"] if v["box_px"]), key=lambda v: v["index"])
+    for level in meta["levels"]:
+        coco = json.loads((dataset / "coco" / f"{level['name']}.json").read_text())
+        annotations = coco["annotations"]
+        assert len(annotations) == len(boxed) > 0
+        for annotation, vessel in zip(annotations, boxed, strict=True):
+            entry = vessel["levels"][level["name"]]
+            assert annotation["distance_m"] == vessel["distance_m"]
+            for key in ("transmittance_mean", "transmittance_min", "optical_depth_centre"):
+                assert annotation[key] == entry[key]
+            x0, y0, x1, y1 = vessel["box_px"]
+            assert annotation["bbox"] == pytest.approx([x0, y0, x1 - x0, y1 - y0], abs=1e-3)

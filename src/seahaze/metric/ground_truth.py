@@ -14,6 +14,7 @@ annotation's ``track_id`` and ``instance_id``), so a video tool reads either fil
 
 from __future__ import annotations
 
+import json
 from collections import defaultdict
 from dataclasses import replace
 from pathlib import Path
@@ -37,12 +38,61 @@ def write_coco(root: Path) -> None:
         truth, _ = build_coco(every, {}, data.names)
         _name_images(truth, level)
         add_video_fields(truth, root)  # sequences' frames: video, frame and track ids
+        add_object_optics(truth, layout, level)
         write_json(layout.coco(level), truth)
         if layout.visible_label_dir(level).is_dir():
             seen, _ = build_coco(visible_truth(data, level, every), {}, data.names)
             _name_images(seen, level)
-            copy_video_fields(truth, seen, layout.visible_label_dir(level))
+            copy_matched_fields(truth, seen, layout.visible_label_dir(level))
             write_json(layout.coco_visible(level), seen)
+
+
+OPTICS_KEYS = (
+    "transmittance_mean",
+    "transmittance_min",
+    "optical_depth_centre",
+    "local_contrast",
+    "discernible",
+)
+"""Per-level facts of a vessel in ``meta`` that its COCO annotations carry (where the meta
+has them: a dataset rendered before they existed has not)."""
+
+
+def add_object_optics(truth: dict[str, Any], layout: Layout, level: str) -> None:
+    """Give each annotation of a level's COCO ``truth`` its vessel's distance and, from
+    ``meta``, its :data:`OPTICS_KEYS` at ``level``: the transmittance over its pixels, the
+    optical depth to its centre, its local contrast and whether it is discernible
+    (docs/dataset-format.md). Annotations follow each label file's lines, that is the boxed
+    vessels in index order (:func:`seahaze.metric.evaluate.build_coco`)."""
+    boxed: dict[int, list[dict[str, Any]]] = {}
+    for image in truth["images"]:
+        meta = read_meta(layout, Path(image["file_name"]).stem)
+        vessels = sorted((v for v in meta["vessels"] if v["box_px"] is not None), key=_index)
+        boxed[image["id"]] = vessels
+    seen: dict[int, int] = defaultdict(int)
+    for annotation in truth["annotations"]:
+        vessels = boxed[annotation["image_id"]]
+        k = seen[annotation["image_id"]]
+        seen[annotation["image_id"]] += 1
+        if k >= len(vessels):
+            continue  # more label lines than boxed vessels: not this meta's (left as is)
+        vessel = vessels[k]
+        entry = vessel.get("levels", {}).get(level, {})
+        annotation["distance_m"] = vessel.get("distance_m")
+        annotation.update({key: entry[key] for key in OPTICS_KEYS if key in entry})
+
+
+def _index(vessel: dict[str, Any]) -> int:
+    return int(vessel["index"])
+
+
+def read_meta(layout: Layout, scene: str) -> dict[str, Any]:
+    """A scene's ``meta`` JSON (MetricInputError naming the file when it cannot be read)."""
+    path = layout.meta(scene)
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as err:
+        raise located(path, f"cannot read the scene's meta ({err})") from None
 
 
 def visible_truth(data: Dataset, level: str, every: list[ImageTruth]) -> list[ImageTruth]:
@@ -66,12 +116,12 @@ TRACK_KEYS = ("track_id", "instance_id")
 """The track fields of a sequence frame's COCO annotation (``instance_id``: mmtracking's name)."""
 
 
-def copy_video_fields(every: dict[str, Any], seen: dict[str, Any], folder: Path) -> None:
+def copy_matched_fields(every: dict[str, Any], seen: dict[str, Any], folder: Path) -> None:
     """Give ``seen`` (a level's ``coco_visible`` truth) the video fields of ``every`` (its
-    ``coco`` truth, after :func:`~seahaze.dataset.tracks.add_video_fields`): ``videos``, each
-    image's ``video_id`` and ``frame_id``, and each annotation the track ids of the
-    annotation it is in ``every``. A truth without ``videos`` (no sequence) leaves ``seen``
-    as it is.
+    ``coco`` truth, after :func:`~seahaze.dataset.tracks.add_video_fields` and
+    :func:`add_object_optics`): ``videos``, each image's ``video_id`` and ``frame_id``, and
+    each annotation the track ids, distance and optics of the annotation it is in ``every``
+    (the video fields only where ``every`` has ``videos``: a sequence).
 
     The track ids are matched, not recomputed: a visible-label file holds lines of its
     ``labels/`` file in their order, so each visible annotation is the next annotation of its
@@ -80,8 +130,6 @@ def copy_video_fields(every: dict[str, Any], seen: dict[str, Any], folder: Path)
     :class:`MetricInputError` naming its file in ``folder`` (``labels_visible/<level>``): a
     visible label that is no vessel's.
     """
-    if "videos" not in every:
-        return
     images = {image["id"]: image for image in every["images"]}
     for image in seen["images"]:
         source = images[image["id"]]  # the same images, ids and order (build_coco)
@@ -102,8 +150,10 @@ def copy_video_fields(every: dict[str, Any], seen: dict[str, Any], folder: Path)
                 "labels are lines of labels/, in their order): a damaged or foreign file",
             )
         source = queue.pop(0)
-        annotation.update({key: source[key] for key in TRACK_KEYS if key in source})
-    seen["videos"] = every["videos"]
+        copied = (*TRACK_KEYS, "distance_m", *OPTICS_KEYS)
+        annotation.update({key: source[key] for key in copied if key in source})
+    if "videos" in every:
+        seen["videos"] = every["videos"]
 
 
 def _name_images(truth: dict[str, list[dict[str, object]]], level: str) -> None:
