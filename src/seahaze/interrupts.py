@@ -10,12 +10,12 @@ signal through, but then drjit and Mitsuba are driven from two threads, and that
 So the render stays on the main thread and :func:`stoppable` adds a watcher thread. Python's
 C-level signal handler writes the signal's number to a *wakeup fd*
 (:func:`signal.set_wakeup_fd`) the moment the signal arrives, even inside a kernel; the
-watcher reads it. A render that returns to Python within :data:`GRACE_S` raises its
-KeyboardInterrupt as usual and everything unwinds normally. One that does not (it is inside
-a kernel) is stopped hard: the watcher runs the registered cleanups (:func:`on_hard_stop`,
-e.g. the dataset lock), says so and ends the process with exit code 130. Nothing of the
-render is lost that a rerun cannot redo: files are written only after a render returns, and
-the batch records a scene only when its files are complete. A second signal stops at once.
+watcher reads it and stops the process at once: it runs the registered cleanups
+(:func:`on_hard_stop`, e.g. the dataset lock), says so and exits with code 130. No
+KeyboardInterrupt is raised inside the render: one raised while drjit traces a kernel comes
+out as a RuntimeError, a failed scene instead of a stop. Nothing is lost that a rerun cannot
+redo: a render writes no file (files are written after it returns), and the batch records a
+scene only when its files are complete, so the interrupted scene stays ``pending``.
 
 The watcher also calls a ``tick`` every :data:`WAIT_STEP_S` (the batch's heartbeat and bar
 clock), which the busy main thread cannot.
@@ -30,15 +30,11 @@ import signal
 import socket
 import sys
 import threading
-import time
 from collections.abc import Callable, Iterator
 
 WAIT_STEP_S = 0.1
 """How often the watcher wakes to call ``tick``; also how often the batch's local executors
 look for finished scenes."""
-GRACE_S = 1.0
-"""After a signal, how long the main thread has to unwind by itself before the process is
-stopped hard (it is then inside a kernel that cannot be cancelled)."""
 EXIT_INTERRUPTED = 130
 """Exit code of an interrupted command (128 + SIGINT), as shells report Ctrl-C."""
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -62,13 +58,16 @@ def on_hard_stop(cleanup: Callable[[], None]) -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def stoppable(tick: Callable[[], None] | None = None) -> Iterator[None]:
-    """Make the block (a render on the main thread) stop within :data:`GRACE_S` of SIGINT or
-    SIGTERM (see the module docstring); ``tick`` is called every :data:`WAIT_STEP_S` meanwhile.
+def stoppable(
+    tick: Callable[[], None] | None = None, signals: tuple[int, ...] = STOP_SIGNALS
+) -> Iterator[None]:
+    """Make the block (a render on the main thread, which writes nothing) end the process on
+    any of ``signals`` within :data:`WAIT_STEP_S` (see the module docstring); ``tick`` is
+    called every :data:`WAIT_STEP_S` meanwhile.
 
     Only the main thread can receive Python's signals; elsewhere (a Dask worker's thread)
-    the block runs as it is, without ticks. SIGTERM without a Python handler of its own
-    raises KeyboardInterrupt here, like Ctrl-C."""
+    the block runs as it is, without ticks. A signal whose handler is ``SIG_IGN`` (a
+    background job's SIGINT) stays ignored."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -76,12 +75,20 @@ def stoppable(tick: Callable[[], None] | None = None) -> Iterator[None]:
     reader.setblocking(False)
     writer.setblocking(False)
     previous = signal.set_wakeup_fd(writer.fileno(), warn_on_full_buffer=False)
-    previous_term = signal.getsignal(signal.SIGTERM)
-    if previous_term in (signal.SIG_DFL, None):
-        signal.signal(signal.SIGTERM, _raise_interrupt)
+    # A Python handler that does nothing: the C-level handler still writes the wakeup fd, and
+    # no KeyboardInterrupt is raised inside the render (drjit turns one raised while it traces
+    # a kernel into a RuntimeError, which would fail the scene instead of stopping).
+    handlers = {
+        signum: signal.signal(signum, _noted)
+        for signum in signals
+        if signal.getsignal(signum) is not signal.SIG_IGN
+    }
     done = threading.Event()
     watcher = threading.Thread(
-        target=_watch, args=(reader, done, tick), name="seahaze-signal-watch", daemon=True
+        target=_watch,
+        args=(reader, done, tick, tuple(handlers)),
+        name="seahaze-signal-watch",
+        daemon=True,
     )
     watcher.start()
     try:
@@ -89,43 +96,41 @@ def stoppable(tick: Callable[[], None] | None = None) -> Iterator[None]:
     finally:
         done.set()
         signal.set_wakeup_fd(previous)
-        if previous_term in (signal.SIG_DFL, None):
-            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        for signum, handler in handlers.items():
+            signal.signal(signum, handler)
         watcher.join()
         reader.close()
         writer.close()
 
 
-def _raise_interrupt(_signum: int, _frame: object) -> None:
-    raise KeyboardInterrupt
+def _noted(_signum: int, _frame: object) -> None:
+    """The Python side of a stop signal during a render: the watcher acts on it."""
 
 
-def _watch(reader: socket.socket, done: threading.Event, tick: Callable[[], None] | None) -> None:
-    """The watcher: tick, and after a stop signal give the main thread :data:`GRACE_S` to
-    leave the block before stopping the process."""
-    signalled_at: float | None = None
+def _watch(
+    reader: socket.socket,
+    done: threading.Event,
+    tick: Callable[[], None] | None,
+    signals: tuple[int, ...],
+) -> None:
+    """The watcher: tick, and stop the process when one of ``signals`` arrives."""
     while not done.is_set():
         ready, _, _ = select.select([reader], [], [], WAIT_STEP_S)
-        if ready and _stop_signals_in(reader):
-            if signalled_at is not None:  # a second signal: the user insists
-                _hard_stop()
-            signalled_at = time.monotonic()
-        overdue = signalled_at is not None and time.monotonic() - signalled_at >= GRACE_S
-        if overdue and not done.is_set():
+        if ready and _stop_signals_in(reader, signals) and not done.is_set():
             _hard_stop()
         if tick is not None and not done.is_set():
             with contextlib.suppress(Exception):  # progress must never break a render
                 tick()
 
 
-def _stop_signals_in(reader: socket.socket) -> bool:
-    """Whether the bytes waiting on the wakeup fd name a stop signal (other handled signals
-    write their numbers too)."""
+def _stop_signals_in(reader: socket.socket, signals: tuple[int, ...]) -> bool:
+    """Whether the bytes waiting on the wakeup fd name one of ``signals`` (other handled
+    signals write their numbers too)."""
     try:
         data = reader.recv(64)
     except BlockingIOError:
         return False
-    return any(number in data for number in STOP_SIGNALS)
+    return any(number in data for number in signals)
 
 
 def _hard_stop() -> None:

@@ -16,7 +16,7 @@ from typing import Any
 
 from ..dataset.layout import Layout
 from ..dataset.writer import write_scene
-from ..interrupts import WAIT_STEP_S, stoppable
+from ..interrupts import STOP_SIGNALS, WAIT_STEP_S, stoppable
 from ..render.engine import render_scene
 from ..spec import SceneSpec
 
@@ -67,9 +67,13 @@ class _InProcess:
     ):
         self.jobs, self.root, self.note, self.tick = jobs, root, note, tick
         self._stop = False
+        self._signals = STOP_SIGNALS
 
     def results(self) -> Iterator[Outcome]:
         signalled = threading.Event()
+        # A background job ignores Ctrl-C (SIGINT is SIG_IGN): only SIGTERM stops its renders.
+        ignored = signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        self._signals = (signal.SIGTERM,) if ignored else STOP_SIGNALS
         restore = _flag_ignored_sigint(signalled)
         try:
             for job in self.jobs:
@@ -84,7 +88,7 @@ class _InProcess:
             signalled.clear()
             start = time.perf_counter()
             try:
-                with stoppable(self.tick):
+                with stoppable(self.tick, self._signals):
                     scene = render_scene(job.spec, job.name, self.note, job.frame)
                 # Files are written only after the whole scene rendered, so a render cut short
                 # by an ignored SIGINT never reaches the folder.
