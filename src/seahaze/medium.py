@@ -293,6 +293,13 @@ class HazeMedium(ABC):
         dirs_z = np.asarray(directions)[..., 2]
         return self.path_length(float(origin[2]), dirs_z, distance_m)
 
+    def thinnest_horizontal_mean(self, camera: Any, reach_m: float) -> float:
+        """The least mean relative density along the horizontal lines of sight at the
+        ``camera``'s height across its view, out to ``reach_m`` (m): how much thinner than
+        ``σ`` the haze box's walls may be seen through. 1 for a medium of height alone (its
+        density is 1 at the camera's height)."""
+        return 1.0
+
     def with_optics(self, albedo: float, g: float) -> HazeMedium:
         """The same shape with another single-scattering ``albedo`` and asymmetry ``g``
         (a dataclass medium gets this for free; another must override it)."""

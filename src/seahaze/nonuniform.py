@@ -84,6 +84,9 @@ class NonUniformHaze(HazeMedium):
     _grid_cache: dict[str, np.ndarray] = dataclass_field(
         default_factory=dict, compare=False, repr=False
     )
+    _lengths_cache: dict[str, np.ndarray] = dataclass_field(
+        default_factory=dict, compare=False, repr=False
+    )
 
     @property
     def albedo(self) -> float:  # type: ignore[override]
@@ -102,7 +105,8 @@ class NonUniformHaze(HazeMedium):
         return self.profile.top
 
     def with_optics(self, albedo: float, g: float) -> HazeMedium:
-        return replace(self, profile=self.profile.with_optics(albedo, g), _grid_cache={})
+        # The same density: the grid and the path lengths still hold.
+        return replace(self, profile=self.profile.with_optics(albedo, g))
 
     # -- the density and optical depths ------------------------------------------------------
     def density_at(self, x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
@@ -122,11 +126,11 @@ class NonUniformHaze(HazeMedium):
         shape = directions.shape[:-1]
         dist = np.minimum(np.broadcast_to(np.asarray(distance_m, np.float64), shape), RAY_REACH_M)
         key = _digest(origin, directions, dist)
-        if key not in self._grid_cache:
-            if len(self._grid_cache) > 4:
-                self._grid_cache.clear()
-            self._grid_cache[key] = self._path_lengths(origin, directions, dist)
-        return self._grid_cache[key].copy()
+        if key not in self._lengths_cache:
+            if len(self._lengths_cache) > 4:
+                self._lengths_cache.clear()
+            self._lengths_cache[key] = self._path_lengths(origin, directions, dist)
+        return self._lengths_cache[key].copy()
 
     def _path_lengths(
         self, origin: np.ndarray, directions: np.ndarray, distance_m: np.ndarray
@@ -183,6 +187,13 @@ class NonUniformHaze(HazeMedium):
         raise NotImplementedError(
             "a haze that varies across the sea needs whole rays: use ray_path_length"
         )
+
+    def thinnest_horizontal_mean(self, camera: Any, reach_m: float) -> float:
+        view = HorizontalView(
+            camera.x_m, camera.y_m, camera.height_m, camera.heading_deg, camera.fov_deg
+        )
+        means = fan_means(self, view, reach_m)
+        return float(means.min())
 
     # -- the reference mode's Mitsuba medium ---------------------------------------------------
     def mitsuba_medium(self, box_min: np.ndarray, box_max: np.ndarray) -> dict[str, Any]:
@@ -312,14 +323,21 @@ def fan_mean(medium: NonUniformHaze, view: HorizontalView) -> float:
     """The mean of ``medium``'s density over the view's horizontal fan (module docstring):
     midpoints of :data:`FAN_AZIMUTHS` azimuths × distance steps no longer than half the
     field's smallest scale, out to :data:`VIEW_REACH_M`."""
+    return float(np.mean(fan_means(medium, view, VIEW_REACH_M)))
+
+
+def fan_means(medium: NonUniformHaze, view: HorizontalView, reach_m: float) -> np.ndarray:
+    """The mean density along each of :data:`FAN_AZIMUTHS` horizontal lines of sight at the
+    view's height across its field of view, out to ``reach_m`` (midpoint rule, steps no
+    longer than half the field's smallest scale)."""
     across = (np.arange(FAN_AZIMUTHS) + 0.5) / FAN_AZIMUTHS - 0.5
     azimuths = view.heading_deg + view.fov_deg * across
-    steps = max(512, math.ceil(VIEW_REACH_M / (0.5 * medium.field.smallest_scale_m())))
-    r = (np.arange(steps) + 0.5) / steps * VIEW_REACH_M
+    steps = max(512, math.ceil(reach_m / (0.5 * medium.field.smallest_scale_m())))
+    r = (np.arange(steps) + 0.5) / steps * reach_m
     az = np.radians(azimuths)[:, None]
     x, y = view.x_m + r * np.cos(az), view.y_m + r * np.sin(az)
     z = np.full_like(x, view.height_m)
-    return float(np.mean(medium.density_at(x, y, z)))
+    return np.mean(medium.density_at(x, y, z), axis=1)
 
 
 def nonuniform_haze(profile: HazeMedium, field: HazeField, view: HorizontalView) -> NonUniformHaze:

@@ -62,6 +62,10 @@ in the pixel and in every dimension of the path, where the other modes keep ``in
 It lowers the sea's error at the same cost, because the pixel's many wave facets and the first
 bounce's reflection lobe are stratified (docs/benchmarks.md, "Ground-truth noise"). It takes
 ``a × b`` samples with ``a = ⌊√spp⌋`` (:func:`stratified_spp`)."""
+BOX_THIN_GROWTH = 4.0
+"""Most the haze box widens for haze thinner than ``σ`` along some horizontal line of sight
+in view (:meth:`seahaze.medium.HazeMedium.thinnest_horizontal_mean`): a bank off to one side;
+beyond that the reference mode's grid would grow too coarse to follow the field."""
 BOX_LAYER_WIDTHS = 3.0
 """Least half-width of the haze box in thicknesses ``H`` of the layer (``haze.top_m`` minus its
 bottom). In dense haze the light reaches the camera by diffusing down through the layer, and
@@ -314,9 +318,12 @@ def build_scene(
         channel_extinction(v, haze.threshold, haze.extinction_spectrum).min()
         for v in visibilities_m or [1.0e4]
     )
-    half_width = max(
-        haze_box_half_width(sigma_min, reach_m), BOX_LAYER_WIDTHS * (top - bottom)
-    )
+    # 8 optical depths to the wall along the thinnest horizontal line of sight in view (a
+    # bank off to one side leaves some thinner than σ), at most BOX_THIN_GROWTH times wider.
+    half_width = haze_box_half_width(sigma_min, reach_m)
+    thinnest = medium.thinnest_horizontal_mean(camera, half_width)
+    widened = haze_box_half_width(sigma_min * max(thinnest, 1.0 / BOX_THIN_GROWTH), reach_m)
+    half_width = max(half_width, widened, BOX_LAYER_WIDTHS * (top - bottom))
     inside = camera.height_m < top and haze_box
     integrator = {"type": "volpath", "max_depth": spec.render.max_depth, "rr_depth": 8}
     scene: dict[str, Any] = {

@@ -14,10 +14,11 @@ Effective visibility
     containing the ray ``ℓ = d`` and ``V_eff = V``; a ray climbing out of a fog layer sees
     farther (``V_eff > V``).
 
-The sky
-    A sky pixel has no surface: its ray is followed for :data:`SKY_REACH_M`, which its ``d``,
-    ``τ``, ``T`` and ``V_eff`` all refer to (a ray that leaves the haze before then counts the
-    clear air beyond it in ``d``).
+The sky and the far sea
+    A ray is followed to its surface or for :data:`SKY_REACH_M`, whichever is nearer: a sky
+    pixel's ``d``, ``τ``, ``T`` and ``V_eff`` refer to that reach (a ray that leaves the haze
+    before then counts the clear air beyond it in ``d``), and so do those of the sea beyond
+    it, where every graded level's transmittance is below 3e-9.
 
 Float32
     ``τ`` is stored as it is: ``T`` underflows to 0 in float32 past ``τ ≈ 103`` (a few km in
@@ -46,7 +47,8 @@ class RayReach:
     """The rays of one scene's pixels through its haze medium: shared by every level."""
 
     distance_m: np.ndarray
-    """(H, W) float64 ``d``: the distance to the surface, :data:`SKY_REACH_M` for the sky."""
+    """(H, W) float64 ``d``: the distance to the surface, at most :data:`SKY_REACH_M` (the
+    sky's)."""
     reduced_m: np.ndarray
     """(H, W) float64 ``ℓ = ∫₀ᵈ ρ ds`` (m)."""
 
@@ -65,9 +67,8 @@ class LevelTransmission:
 
 def ray_reach(geometry: GeometryPass, medium: HazeMedium) -> RayReach:
     """Distance and reduced length of every pixel-centre ray of ``geometry`` in ``medium``."""
-    distance = np.where(
-        np.isfinite(geometry.distance_m), geometry.distance_m.astype(np.float64), SKY_REACH_M
-    )
+    # Each ray to its surface or SKY_REACH_M, whichever is nearer (the sky's are all SKY_REACH_M).
+    distance = np.minimum(geometry.distance_m.astype(np.float64), SKY_REACH_M)
     reduced = medium.ray_path_length(geometry.origin, geometry.directions, distance)
     return RayReach(distance, np.asarray(reduced, np.float64))
 
