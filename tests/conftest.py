@@ -263,3 +263,19 @@ sequence: {frames: 3, fps: 2}
 render: {spp: 1, seed: 3}
 """
 """A 3-frame sequence of two moving vessels at 64×36, 1 spp: the sequence tests' scene."""
+
+
+PAIR_SCENE = """\
+name: pair
+camera: {height_m: 15, fov_deg: 20, pitch_deg: -3, resolution: [64, 36]}
+sea: {quality: low, seed: 3}
+vessels:
+  placed:
+    - {class: fishing_boat, distance_m: 150, bearing_deg: 4, heading_deg: 90, length_m: 18}
+    - {class: container_ship, distance_m: 2000, bearing_deg: -4, heading_deg: 90, length_m: 200}
+haze: {levels: [300, 4000]}
+labels: {write_visible: WRITE}
+render: {spp: 4, seed: 1, write_exr: false}
+"""
+"""Two vessels whose visibility at 300 m is known: the boat at 150 m is seen, the ship 2 km away
+is not (at 4000 m both are). ``WRITE``: ``true`` or ``false`` for ``labels.write_visible``."""

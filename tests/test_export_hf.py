@@ -25,7 +25,7 @@ import pytest
 import yaml
 from PIL import Image
 
-from conftest import SPLIT_SCENES, TINY_SEQUENCE, cli_run
+from conftest import PAIR_SCENE, SPLIT_SCENES, TINY_SEQUENCE, cli_run
 from seahaze.dataset.card import MSVD_CITATION
 from seahaze.dataset.owned import RECORD_NAME
 from seahaze.export.hf import plan_hf
@@ -38,22 +38,6 @@ HAS_PYARROW = importlib.util.find_spec("pyarrow") is not None
 NEEDS_PYARROW = pytest.mark.skipif(
     not HAS_PYARROW, reason="pyarrow is not installed: pip install 'seahaze[hf]'"
 )
-
-PAIR_SCENE = """\
-name: pair
-camera: {height_m: 15, fov_deg: 20, pitch_deg: -3, resolution: [64, 36]}
-sea: {quality: low, seed: 3}
-vessels:
-  placed:
-    - {class: fishing_boat, distance_m: 150, bearing_deg: 4, heading_deg: 90, length_m: 18}
-    - {class: container_ship, distance_m: 2000, bearing_deg: -4, heading_deg: 90, length_m: 200}
-haze: {levels: [300, 4000]}
-labels: {write_visible: true}
-render: {spp: 4, seed: 1, write_exr: false}
-"""
-"""tests/test_visible_labels.py's scene: at V = 300 m the ship 2 km away is not visible (not in
-``labels_visible/v0300``) and the boat at 150 m is; at 4000 m both are."""
-
 
 def export(dataset: Path, out: Path, *flags: str) -> tuple[int, str, str]:
     return cli_run(["export", str(dataset), "--layout", "hf", "--out", str(out), *flags], 120)
@@ -313,7 +297,7 @@ def test_the_card_is_the_hub_card_and_its_patterns_find_every_shard(split_view):
 def pair_dataset(tmp_path_factory) -> Path:
     """One scene with ``labels.write_visible``: a boat seen at 300 m and a ship that is not."""
     root = tmp_path_factory.mktemp("hf_pair")
-    (root / "pair.yaml").write_text(PAIR_SCENE)
+    (root / "pair.yaml").write_text(PAIR_SCENE.replace("WRITE", "true"))
     code, _, err = cli_run(["render", str(root / "pair.yaml"), "--out", str(root / "ds")], 300)
     assert code == 0, err
     return root / "ds"

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import PAIR_SCENE
 from seahaze.cli import main
 from seahaze.dataset.layout import Layout
 from seahaze.labels import Box
@@ -199,27 +200,15 @@ def test_scene_files_list_the_visible_labels_only_with_the_option(tmp_path):
 
 
 # ------------------------------------------------------------------------------------------
-# A rendered scene whose answer is known
+# A rendered scene whose answer is known (conftest.PAIR_SCENE)
 
-SCENE = """\
-name: pair
-camera: {height_m: 15, fov_deg: 20, pitch_deg: -3, resolution: [64, 36]}
-sea: {quality: low, seed: 3}
-vessels:
-  placed:
-    - {class: fishing_boat, distance_m: 150, bearing_deg: 4, heading_deg: 90, length_m: 18}
-    - {class: container_ship, distance_m: 2000, bearing_deg: -4, heading_deg: 90, length_m: 200}
-haze: {levels: [300, 4000]}
-labels: {write_visible: WRITE}
-render: {spp: 4, seed: 1, write_exr: false}
-"""
 NEAR, FAR = 0, 1
 LEVELS = ["clean", "v0300", "v4000"]
 
 
 def render_pair(root: Path, write_visible: bool) -> Path:
     scene = root / "pair.yaml"
-    scene.write_text(SCENE.replace("WRITE", "true" if write_visible else "false"))
+    scene.write_text(PAIR_SCENE.replace("WRITE", "true" if write_visible else "false"))
     out = root / "out"
     assert main(["render", str(scene), "--out", str(out), "--quiet"]) == 0
     return out
@@ -301,7 +290,7 @@ def test_resume_checks_and_force_prunes_the_visible_labels(pair, tmp_path):
     out = tmp_path / "out"
     shutil.copytree(pair, out)
     scene = tmp_path / "pair.yaml"
-    scene.write_text(SCENE.replace("WRITE", "true"))
+    scene.write_text(PAIR_SCENE.replace("WRITE", "true"))
     damaged = out / "labels_visible" / "v0300" / "pair.txt"
     original = damaged.read_bytes()
     damaged.write_text("")  # a valid, empty label file: only the content hash tells
