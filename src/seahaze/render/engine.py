@@ -41,7 +41,7 @@ from .transmission import (
     RayReach,
     level_transmission,
     ray_reach,
-    vessel_transmission,
+    vessel_rays,
 )
 from .variant import select_variant
 
@@ -442,17 +442,15 @@ def _with_transmission(
 ) -> list[dict[str, Any]]:
     """``meta``'s vessels with, per hazy level, the transmittance over the pixels that show
     each vessel and the optical depth to its centre (the middle of its air draft above its
-    waterline), at the level's nominal extinction (:func:`vessel_transmission`)."""
+    waterline), at the level's nominal extinction (:class:`VesselRays`: each vessel's rays
+    are traced once for every level)."""
+    sigmas = {level.name: extinction_coefficient(level.visibility_m, threshold) for level in levels}
     for entry in vessels:
         x, y, waterline = entry["position_m"]
         centre = np.array([x, y, waterline + 0.5 * entry["air_draft_m"]])
-        for level in levels:
-            sigma = extinction_coefficient(level.visibility_m, threshold)
-            entry["levels"][level.name].update(
-                vessel_transmission(
-                    reach, sigma, geo.instance, entry["index"], centre, geo.origin, medium
-                )
-            )
+        rays = vessel_rays(reach, geo.instance, entry["index"], centre, geo.origin, medium)
+        for name, sigma in sigmas.items():
+            entry["levels"][name].update(rays.entries(sigma))
     return vessels
 
 

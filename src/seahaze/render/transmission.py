@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from ..haze import optical_depth
 from ..medium import HazeMedium
 from ..nonuniform import RAY_REACH_M
 from .passes import GeometryPass
@@ -78,7 +79,7 @@ def level_transmission(
 ) -> LevelTransmission:
     """The maps of a level of extinction ``sigma_rgb`` (3,) in 1/m and nominal visibility
     ``visibility_m`` (m) for the rays of ``reach``."""
-    tau = reach.reduced_m[..., None] * np.asarray(sigma_rgb, np.float64)
+    tau = optical_depth(sigma_rgb, reach.reduced_m)
     with np.errstate(divide="ignore"):
         v_eff = np.where(
             reach.reduced_m > 0.0, visibility_m * reach.distance_m / reach.reduced_m, np.inf
@@ -88,27 +89,39 @@ def level_transmission(
     )
 
 
-def vessel_transmission(
+@dataclass(frozen=True)
+class VesselRays:
+    """One vessel's rays through the medium, shared by every level: the reduced lengths (m)
+    of the pixel rays that show it (its instance mask, which its box bounds) and of the
+    straight ray from the camera to its centre."""
+
+    shown_reduced_m: np.ndarray
+    centre_reduced_m: float
+
+    def entries(self, sigma_per_m: float) -> dict[str, Any]:
+        """The vessel's entries at a level of nominal extinction ``sigma_per_m`` (1/m): the
+        mean and least transmittance over its pixels (None when no pixel shows it) and the
+        optical depth to its centre."""
+        t = np.exp(-sigma_per_m * self.shown_reduced_m)
+        return {
+            "transmittance_mean": float(t.mean()) if t.size else None,
+            "transmittance_min": float(t.min()) if t.size else None,
+            "optical_depth_centre": float(sigma_per_m * self.centre_reduced_m),
+        }
+
+
+def vessel_rays(
     reach: RayReach,
-    sigma_per_m: float,
     instance: np.ndarray,
     vessel_index: int,
     centre_m: np.ndarray,
     camera_m: np.ndarray,
     medium: HazeMedium,
-) -> dict[str, Any]:
-    """One vessel's entries at a level of nominal extinction ``sigma_per_m`` (1/m): the mean
-    and least transmittance over the pixels that show it (its instance mask, which its box
-    bounds; None when no pixel does) and the optical depth of the straight ray from the camera
-    at ``camera_m`` to its centre ``centre_m`` (world frame, m)."""
-    shown = reach.reduced_m[instance == vessel_index]
-    t = np.exp(-sigma_per_m * shown)
+) -> VesselRays:
+    """The rays of vessel ``vessel_index`` (its pixels in ``instance``) and of its centre
+    ``centre_m`` seen from the camera at ``camera_m`` (world frame, m) in ``medium``."""
     ray = np.asarray(centre_m, np.float64) - np.asarray(camera_m, np.float64)
     distance = float(np.linalg.norm(ray))
     direction = ray / distance if distance > 0.0 else np.array([1.0, 0.0, 0.0])
     to_centre = medium.ray_path_length(camera_m, direction[None, :], np.array([distance]))
-    return {
-        "transmittance_mean": float(t.mean()) if t.size else None,
-        "transmittance_min": float(t.min()) if t.size else None,
-        "optical_depth_centre": float(sigma_per_m * to_centre[0]),
-    }
+    return VesselRays(reach.reduced_m[instance == vessel_index], float(to_centre[0]))
