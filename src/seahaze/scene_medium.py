@@ -37,14 +37,29 @@ def scene_haze_medium(spec: Any, camera: Any, frame: int | None = None) -> HazeM
     sequence the field only moves. Directions in the scene file are relative to the
     camera's heading (``camera.heading_deg``, as the file gives it: a ship's turning does not
     turn the fog); the bank's edge is measured from where the camera starts."""
-    haze = spec.haze
-    profile = haze_medium(haze, camera.height_m)
-    if haze.patches is None and haze.bank is None:
-        return profile
-    heading = float(spec.camera.heading_deg)
+    profile = haze_medium(spec.haze, camera.height_m)
     time_s = 0.0
     if frame is not None and spec.sequence is not None:
         time_s = frame / spec.sequence.fps
+    field = haze_field(spec, time_s)
+    if field is None:
+        return profile
+    # The level's normalisation is the field's at time 0 over the view of the camera as the
+    # file gives it: in a sequence the field then only moves, frame to frame.
+    cam = spec.camera
+    view = HorizontalView(0.0, 0.0, cam.height_m, cam.heading_deg, cam.fov_deg)
+    at_start = replace(field, drift=replace(field.drift, time_s=0.0))
+    return NonUniformHaze(profile, field, nonuniform_haze(profile, at_start, view).scale)
+
+
+def haze_field(spec: Any, time_s: float = 0.0) -> HazeField | None:
+    """The patches and bank of a scene's ``haze`` (:mod:`seahaze.haze_field`) at ``time_s``
+    (s), in the world frame (directions turned by ``camera.heading_deg``, the patches seeded
+    from the scene's seed); None for haze that varies with height alone."""
+    haze = spec.haze
+    if haze.patches is None and haze.bank is None:
+        return None
+    heading = float(spec.camera.heading_deg)
     drift = Drift(haze.drift.speed_m_s, heading + haze.drift.toward_deg, time_s)
     patches = None
     if haze.patches is not None:
@@ -56,9 +71,4 @@ def scene_haze_medium(spec: Any, camera: Any, frame: int | None = None) -> HazeM
         b = haze.bank
         start = (0.0, 0.0)  # the camera's starting point: a still camera's, a ship's frame 0
         bank = Bank(b.distance_m, heading + b.bearing_deg, b.edge_m, b.near_ratio, start)
-    # The level's normalisation is the field's at time 0 over the view of the camera as the
-    # file gives it: in a sequence the field then only moves, frame to frame.
-    cam = spec.camera
-    view = HorizontalView(0.0, 0.0, cam.height_m, cam.heading_deg, cam.fov_deg)
-    start = nonuniform_haze(profile, HazeField(patches, bank, replace(drift, time_s=0.0)), view)
-    return NonUniformHaze(profile, HazeField(patches, bank, drift), start.scale)
+    return HazeField(patches, bank, drift)

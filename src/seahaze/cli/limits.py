@@ -230,17 +230,12 @@ def varying_haze_seconds(spec: SceneSpec) -> float:
     ``haze.bank``): once per scene, three Gauss points per panel of its horizontal scale
     over :data:`FIELD_RAY_M` per pixel (:mod:`seahaze.nonuniform`), plus the ``reference``
     mode's density grid; 0 for haze that varies with height alone."""
-    from ..haze_field import Bank, HazeField, Patches
     from ..nonuniform import GRID_SHAPE
+    from ..scene_medium import haze_field
 
-    haze = spec.haze
-    if haze.patches is None and haze.bank is None:
+    field = haze_field(spec)
+    if field is None:
         return 0.0
-    p, b = haze.patches, haze.bank
-    field = HazeField(
-        None if p is None else Patches(p.correlation_m, p.anisotropy, p.vertical_m, 1.0, 0),
-        None if b is None else Bank(b.distance_m, 0.0, b.edge_m, b.near_ratio),
-    )
     horizontal, _ = field.scales_m()
     width, height = spec.camera.resolution
     points = width * height * 3.0 * FIELD_RAY_M / horizontal
