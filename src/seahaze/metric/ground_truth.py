@@ -14,8 +14,10 @@ annotation's ``track_id`` and ``instance_id``), so a video tool reads either fil
 
 from __future__ import annotations
 
+import functools
 import json
 from collections import defaultdict
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -33,12 +35,14 @@ def write_coco(root: Path) -> None:
     visible-object COCO where ``labels_visible/<level>/`` exists)."""
     data = load_dataset(root)
     layout = Layout(root)
+    # Every level's annotations read the same meta files: each is read once.
+    meta_of = functools.cache(lambda scene: read_meta(layout, scene))
     for level in data.levels:
         every = load_level_truth(data, level)
         truth, _ = build_coco(every, {}, data.names)
         _name_images(truth, level)
         add_video_fields(truth, root)  # sequences' frames: video, frame and track ids
-        add_object_optics(truth, layout, level)
+        add_object_optics(truth, meta_of, level)
         write_json(layout.coco(level), truth)
         if layout.visible_label_dir(level).is_dir():
             seen, _ = build_coco(visible_truth(data, level, every), {}, data.names)
@@ -58,15 +62,18 @@ OPTICS_KEYS = (
 has them: a dataset rendered before they existed has not)."""
 
 
-def add_object_optics(truth: dict[str, Any], layout: Layout, level: str) -> None:
+def add_object_optics(
+    truth: dict[str, Any], meta_of: Callable[[str], dict[str, Any]], level: str
+) -> None:
     """Give each annotation of a level's COCO ``truth`` its vessel's distance and, from
-    ``meta``, its :data:`OPTICS_KEYS` at ``level``: the transmittance over its pixels, the
-    optical depth to its centre, its local contrast and whether it is discernible
-    (docs/dataset-format.md). Annotations follow each label file's lines, that is the boxed
-    vessels in index order (:func:`seahaze.metric.evaluate.build_coco`)."""
+    its scene's ``meta`` (``meta_of(scene)``), its :data:`OPTICS_KEYS` at ``level``: the
+    transmittance over its pixels, the optical depth to its centre, its local contrast and
+    whether it is discernible (docs/dataset-format.md). Annotations follow each label file's
+    lines, that is the boxed vessels in index order
+    (:func:`seahaze.metric.evaluate.build_coco`)."""
     boxed: dict[int, list[dict[str, Any]]] = {}
     for image in truth["images"]:
-        meta = read_meta(layout, Path(image["file_name"]).stem)
+        meta = meta_of(Path(image["file_name"]).stem)
         vessels = sorted((v for v in meta["vessels"] if v["box_px"] is not None), key=_index)
         boxed[image["id"]] = vessels
     seen: dict[int, int] = defaultdict(int)
