@@ -129,15 +129,32 @@ JSON_FROM_RADIANCE = ("meta", "dataset.json", "coco", "coco_visible")
 meta): compared to float precision, as the EXRs."""
 
 
-def _assert_same_dataset(ours: Path, reference: Path) -> None:
+def _assert_pngs_within_one_level(ours: Path, reference: Path) -> None:
+    """Two PNGs of the same size whose pixels differ by at most one code value, at no more
+    than 1 pixel in 1000: the quantised form of a float-precision difference."""
+    from PIL import Image
+
+    x = np.asarray(Image.open(ours), dtype=np.int64)
+    y = np.asarray(Image.open(reference), dtype=np.int64)
+    assert x.shape == y.shape, ours
+    differ = np.abs(x - y)
+    assert differ.max() <= 1 and np.mean(differ > 0) <= 1e-3, (ours, differ.max())
+
+
+def _assert_same_dataset(ours: Path, reference: Path, variant: str) -> None:
     """The resumed folder holds what an uninterrupted run writes: every file, the PNGs, labels
     and depth byte for byte. The linear EXRs (and the numbers meta and dataset.json derive from
     them) are compared to float precision: at 1024 spp and more, two uninterrupted renders can
-    differ in their last bits (docs/limits.md, "Reproducibility"), a fault apart from resuming."""
+    differ in their last bits (docs/limits.md, "Reproducibility"), a fault apart from resuming.
+    Under ``cuda_ad_rgb`` the GPU adds samples into pixels in no fixed order, so two runs
+    differ in the last bits at any sample count, and a PNG pixel can round one code value
+    apart: there the PNGs are compared to that."""
     a, b = _tree(ours), _tree(reference)
     assert a.keys() == b.keys()
     for rel in a:
-        if rel.startswith("exr/"):
+        if rel.endswith(".png") and variant.startswith("cuda"):
+            _assert_pngs_within_one_level(ours / rel, reference / rel)
+        elif rel.startswith("exr/"):
             x, y = read_exr(ours / rel), read_exr(reference / rel)
             assert x.keys() == y.keys(), rel
             for channel in x:
@@ -154,7 +171,7 @@ def _uninterrupted(scene: Path, out: Path, *extra: str) -> Path:
     return out
 
 
-def test_ctrl_c_stops_a_long_pass_at_once_and_the_folder_resumes(scene, tmp_path):
+def test_ctrl_c_stops_a_long_pass_at_once_and_the_folder_resumes(scene, tmp_path, mitsuba_variant):
     out = tmp_path / "ds"
     command = _command(scene, out)
     # Past the scene's geometry and load: in its one pass, compiling or rendering.
@@ -164,10 +181,11 @@ def test_ctrl_c_stops_a_long_pass_at_once_and_the_folder_resumes(scene, tmp_path
     assert _statuses(out) == {"long": "pending"}
     resumed = subprocess.run([*command, "--quiet"], capture_output=True, text=True)
     assert resumed.returncode == 0, resumed.stderr
-    _assert_same_dataset(out, _uninterrupted(scene, tmp_path / "uninterrupted"))
+    reference = _uninterrupted(scene, tmp_path / "uninterrupted")
+    _assert_same_dataset(out, reference, mitsuba_variant)
 
 
-def test_ctrl_c_stops_local_workers_and_the_folder_resumes(small_scene, tmp_path):
+def test_ctrl_c_stops_local_workers_and_the_folder_resumes(small_scene, tmp_path, mitsuba_variant):
     out, log = tmp_path / "ds", tmp_path / "log.jsonl"
     command = _command(small_scene, out, "--scenes", "2", "--workers", "2", "--log", str(log))
     # The workers start, load Mitsuba and the scene, and compile and render the pass.
@@ -178,7 +196,7 @@ def test_ctrl_c_stops_local_workers_and_the_folder_resumes(small_scene, tmp_path
     resumed = subprocess.run([*command, "--quiet"], capture_output=True, text=True)
     assert resumed.returncode == 0, resumed.stderr
     reference = _uninterrupted(small_scene, tmp_path / "uninterrupted", "--scenes", "2")
-    _assert_same_dataset(out, reference)
+    _assert_same_dataset(out, reference, mitsuba_variant)
 
 
 def test_sigterm_stops_a_long_pass_at_once(scene, tmp_path):
