@@ -158,6 +158,38 @@ def sun_scattered_fraction(
     return ops.select(ops.abs(x) < TINY_OPTICAL_DEPTH, series, (near - far) * inv_climb)
 
 
+def grid_medium_dict(
+    grid: Any, box_min: np.ndarray, box_max: np.ndarray, albedo: float, g: float
+) -> dict[str, Any]:
+    """A Mitsuba ``heterogeneous`` medium over the ``mi.VolumeGrid`` ``grid`` stretched over the
+    box from ``box_min`` to ``box_max`` (world corners, m), trilinear, with single-scattering
+    ``albedo`` and a Henyey–Greenstein phase function of asymmetry ``g``.
+
+    The grid is looked up in full float32 arithmetic on every variant (``accel`` off): on a GPU
+    Mitsuba would otherwise use the texture units, whose interpolation weights have 8 bits of
+    fraction (CUDA Programming Guide, "Texture fetching", linear filtering), so the reference
+    would differ from the CPU's beyond float precision."""
+    import mitsuba as mi
+
+    box_min, box_max = np.asarray(box_min, np.float64), np.asarray(box_max, np.float64)
+    to_world = (
+        mi.ScalarTransform4f().translate(box_min.tolist()).scale((box_max - box_min).tolist())
+    )
+    return {
+        "type": "heterogeneous",
+        "albedo": albedo,
+        "sigma_t": {
+            "type": "gridvolume",
+            "grid": grid,
+            "filter_type": "trilinear",
+            "accel": False,
+            "to_world": to_world,
+        },
+        "scale": 1.0,
+        "phase": {"type": "hg", "g": g},
+    }
+
+
 class HazeMedium(ABC):
     """What a renderer asks of a haze: its shape as a relative density ``ρ`` (the levels scale
     it by their ``σ_k``), its bounds, reduced lengths along rays, and its single-scattering
@@ -238,21 +270,8 @@ class HazeMedium(ABC):
         override it."""
         import mitsuba as mi
 
-        to_world = mi.ScalarTransform4f().translate(box_min.tolist()).scale(
-            (box_max - box_min).tolist()
-        )
-        return {
-            "type": "heterogeneous",
-            "albedo": self.albedo,
-            "sigma_t": {
-                "type": "gridvolume",
-                "grid": mi.VolumeGrid(self.density_grid(np.ones(3))),
-                "filter_type": "trilinear",
-                "to_world": to_world,
-            },
-            "scale": 1.0,
-            "phase": {"type": "hg", "g": self.g},
-        }
+        grid = mi.VolumeGrid(self.density_grid(np.ones(3)))
+        return grid_medium_dict(grid, box_min, box_max, self.albedo, self.g)
 
     def mitsuba_level(self, sigma_rgb: np.ndarray, albedo: float, g: float) -> dict[str, Any]:
         """The Mitsuba scene parameters, by name below the medium's id, that make

@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from .haze_field import HazeField
-from .medium import NUMPY, ArrayOps, HazeMedium
+from .medium import NUMPY, ArrayOps, HazeMedium, grid_medium_dict
 
 RAY_REACH_M = 20_000.0
 """How far a ray is followed (m; the sky's rays end here): every graded level's transmittance
@@ -205,21 +205,8 @@ class NonUniformHaze(HazeMedium):
         box_min, box_max = np.asarray(box_min, np.float64), np.asarray(box_max, np.float64)
         grid = self.density_grid_over(box_min, box_max, GRID_SHAPE)
         self._grid_cache["rho"] = grid
-        to_world = (
-            mi.ScalarTransform4f().translate(box_min.tolist()).scale((box_max - box_min).tolist())
-        )
-        return {
-            "type": "heterogeneous",
-            "albedo": self.albedo,
-            "sigma_t": {
-                "type": "gridvolume",
-                "grid": mi.VolumeGrid(_with_rgb(grid, np.zeros(3))),
-                "filter_type": "trilinear",
-                "to_world": to_world,
-            },
-            "scale": 1.0,
-            "phase": {"type": "hg", "g": self.g},
-        }
+        volume = mi.VolumeGrid(_with_rgb(grid, np.zeros(3)))
+        return grid_medium_dict(volume, box_min, box_max, self.albedo, self.g)
 
     def mitsuba_level(self, sigma_rgb: np.ndarray, albedo: float, g: float) -> dict[str, Any]:
         import mitsuba as mi
