@@ -5,7 +5,8 @@ The benchmark scene (``scenes/benchmark.yaml``, 80×45) is rendered at visibilit
 ``volpath`` (``--batches`` independent batches of 1024 spp, seeds past those of the stored
 references) and by ``physical`` (2^20-photon tables, four sampler seeds at 256 spp), both with
 the scene's ``sun.scale`` and ``sky.scale`` replaced by ``--sun`` and ``--sky`` and ``haze.g`` by
-``--g`` (and the camera's heading by ``--heading``: 150° looks toward the sun); then both
+``--g`` (and the camera's heading by ``--heading``: 150° looks toward the sun; the sky by
+``--sky-model``, e.g. ``overcast``); then both
 without haze. It prints, per region (sea, sky, all vessels, and each of the
 first three vessels), the relative difference of the region means, physical against volpath,
 ± the volpath mean's standard error (from its batches).
@@ -17,6 +18,7 @@ camera looks up or down steeply (the haze's light from directions a level view n
 samples), and ``--bands N`` splits sky and sea into N row bands.
 
 Usage: python scripts/compare_components.py V [--batches 8] [--g 0.75] [--sun 1] [--sky 1]
+       [--sky-model clear|overcast]
        [--heading DEG] [--pitch DEG] [--fov DEG] [--bands N] [--vessel-light SHARE]
 """
 
@@ -64,6 +66,9 @@ def main() -> None:
     parser.add_argument("--sun", type=float, default=1.0, help="sun.scale")
     parser.add_argument("--sky", type=float, default=1.0, help="sky.scale")
     parser.add_argument(
+        "--sky-model", choices=("clear", "overcast"), default=None, help="sky.model"
+    )
+    parser.add_argument(
         "--heading", type=float, default=None, help="camera.heading_deg (default: the scene's)"
     )
     parser.add_argument("--pitch", type=float, default=None, help="camera.pitch_deg")
@@ -89,6 +94,8 @@ def main() -> None:
 
     base, _ = load_scene(SCENE)
     changes: dict = {"sun": {"scale": args.sun}, "sky": {"scale": args.sky}}
+    if args.sky_model is not None:
+        changes["sky"]["model"] = args.sky_model
     if args.g is not None:
         changes["haze"] = {"g": args.g}
     camera = {
@@ -132,7 +139,7 @@ def main() -> None:
         for name in ("sky", "sea"):
             regions[f"{name} r{band[0]}-{band[-1]}"] = regions[name] & in_band
     print(
-        f"V = {v:g} m, g = {haze.g}, sun × {args.sun}, sky × {args.sky}; "
+        f"V = {v:g} m, g = {haze.g}, sun × {args.sun}, sky × {args.sky} ({base.sky.model}); "
         f"{time.perf_counter() - start:.0f} s"
     )
     for name, m in regions.items():

@@ -206,7 +206,8 @@ def main() -> None:
 
     from seahaze import imaging
     from seahaze.render.engine import open_session
-    from seahaze.render.scene import sensor_dict, shape_registry_id, sunsky_dict
+    from seahaze.render.scene import sensor_dict, shape_registry_id
+    from seahaze.render.sky import sun_and_sky_dicts
     from seahaze.sceneio import load_scene
     from seahaze.spec import with_overrides
     from seahaze.world import sun_direction
@@ -217,8 +218,7 @@ def main() -> None:
     session = open_session(spec)
     scene, cam = session.loaded.scene, session.camera
     sea = next(s for s in scene.shapes() if s.id() == "sea")
-    sun = mi.load_dict(sunsky_dict(spec, sky=False))
-    sky = mi.load_dict(sunsky_dict(spec, sun=False))
+    sun, sky = (mi.load_dict(d) for d in sun_and_sky_dicts(spec))
     sun_dir = sun_direction(spec.sun.elevation_deg, spec.sun.azimuth_deg)
     masks = regions(session)
 

@@ -21,7 +21,7 @@ from pydantic import ValidationError
 from conftest import box_vessel, load_flat_scene, small_spec
 from seahaze.render import denoise, passes, physical
 from seahaze.render.estimator import DEFAULT_SETTINGS, EstimatorSettings
-from seahaze.render.scene import sunsky_dict
+from seahaze.render.sky import sun_and_sky_dicts
 from seahaze.spec import with_overrides
 
 pytestmark = pytest.mark.usefixtures("mitsuba_variant")
@@ -37,8 +37,7 @@ def test_sun_cone_sampling_integrates_the_sun_disk() -> None:
     from seahaze.render.sun_disk import SUN_APERTURE_DEG, disk_irradiance, sun_axis
 
     spec = small_spec(sun={"elevation_deg": 28.0, "azimuth_deg": 150.0})
-    sun = mi.load_dict(sunsky_dict(spec, sky=False))
-    sky = mi.load_dict(sunsky_dict(spec, sun=False))
+    sun, sky = (mi.load_dict(d) for d in sun_and_sky_dicts(spec))
     camera_pass, _ = integrator_classes()
     medium = HomogeneousSlab(300.0)
     integrator = camera_pass(sun, sky, medium, 1, True, spec.sea.wind_speed, DEFAULT_SETTINGS)

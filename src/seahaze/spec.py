@@ -173,8 +173,17 @@ class SunSpec(_Spec):
 
 
 class SkySpec(_Spec):
-    """The clear-sky dome above the haze layer (Hosek & Wilkie 2012, Mitsuba `sunsky`)."""
+    """The sky above the haze layer: clear (Hosek & Wilkie 2012, Mitsuba `sunsky`) or overcast
+    (the CIE overcast sky, :mod:`seahaze.overcast`)."""
 
+    model: Literal["clear", "overcast"] = Field(
+        "clear",
+        description="`clear`: the Hosek–Wilkie sun and sky. `overcast`: a full cloud deck "
+        "hides the sun; the CIE overcast sky (radiance a third of the zenith's at the "
+        "horizon, grey), as bright as the quarter of the clear sky's global irradiance at "
+        "the same sun elevation and turbidity that cloud lets through (Kasten & Czeplak "
+        "1980). The sun's elevation still sets how bright the day is.",
+    )
     turbidity: float = Field(
         3.0,
         ge=1.0,
@@ -197,6 +206,15 @@ class SkySpec(_Spec):
         description="Multiplier on the sky's radiance (1 = physical).",
         json_schema_extra=_unit("1"),
     )
+
+    @model_serializer(mode="wrap")
+    def _omit_the_clear_model(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # A clear sky keeps a recorded config byte-identical to before the overcast sky existed
+        # (the config's digest decides whether a dataset folder resumes).
+        data = handler(self)
+        if self.model == "clear":
+            data.pop("model", None)
+        return data
 
 
 class SeaSpec(_Spec):

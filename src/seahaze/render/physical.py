@@ -31,8 +31,9 @@ from .diffuse_table import DEFAULT_GRID, TableGrid, build_tables
 from .estimator import DEFAULT_SETTINGS, EstimatorSettings
 from .passes import GeometryPass, render_geometry, render_radiance
 from .photon_sources import emitter_photons, sample_sea_reflectance, sea_bsdf
-from .scene import SEA_SHAPE, LoadedScene, stratified_spp, sunsky_dict
+from .scene import SEA_SHAPE, LoadedScene, stratified_spp
 from .segment_smooth import segments, smooth_within_segments
+from .sky import sun_and_sky_dicts
 
 FILM_BUDGET_BYTES = 2 << 30
 """Most memory the film of one pass may take; more levels are rendered in several passes,
@@ -85,8 +86,8 @@ class PhysicalRenderer:
         self.loaded, self.settings, self.medium = loaded, settings, loaded.medium
         # The sun and the sky as separate emitters: the sun's single scattering is computed
         # per pixel with shadow rays, the sky's goes into the table.
-        self.sun = mi.load_dict(sunsky_dict(spec, sky=False))
-        self.sky = mi.load_dict(sunsky_dict(spec, sun=False))
+        sun, sky = sun_and_sky_dicts(spec)
+        self.sun, self.sky = mi.load_dict(sun), mi.load_dict(sky)
         self.sun_azimuth_rad = math.radians(spec.sun.azimuth_deg)
         self.wind_speed = spec.sea.wind_speed  # the width of the sun glint seen from a hull
         self.sea = sample_sea_reflectance(

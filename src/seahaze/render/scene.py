@@ -42,9 +42,9 @@ from ..world import (
     SEA_NEAR_ROUGHNESS,
     MeshData,
     SceneGeometry,
-    sun_direction,
 )
 from .fleet import PAINT_ATTRIBUTE, fleet_meshes, loaded_vessel_bsdfs, vessel_spheres
+from .sky import sky_dict
 
 SEA_SHAPE = -1
 """:attr:`LoadedScene.shape_ids` value of the sea mesh."""
@@ -202,20 +202,6 @@ def stratified_spp(spp: int) -> int:
     return 1
 
 
-def sunsky_dict(spec: SceneSpec, sun: bool = True, sky: bool = True) -> dict:
-    """The Hosek–Wilkie ``sunsky`` emitter of ``spec``; ``sun``/``sky`` False switch a part off
-    (the ``physical`` mode samples the sun on its own)."""
-    direction = sun_direction(spec.sun.elevation_deg, spec.sun.azimuth_deg)
-    return {
-        "type": "sunsky",
-        "sun_direction": direction.tolist(),
-        "turbidity": spec.sky.turbidity,
-        "albedo": spec.sky.ground_albedo,
-        "sun_scale": spec.sun.scale if sun else 0.0,
-        "sky_scale": spec.sky.scale if sky else 0.0,
-    }
-
-
 @dataclass
 class LoadedScene:
     """A Mitsuba scene plus the handles the render passes need."""
@@ -350,7 +336,7 @@ def build_scene(
             0.0,
             haze_box,
         ),
-        "sky": sunsky_dict(spec),
+        "sky": sky_dict(spec),
         HAZE_BOX_ID: {
             "type": "cube",
             "to_world": mi.ScalarTransform4f()
@@ -381,7 +367,7 @@ def build_scene(
             camera, camera.width, camera.height, camera.fov_deg, camera.pitch_deg, False
         )
         clean = {"type": "scene", "integrator": integrator, "sensor": sensor}
-        clean_scene = mi.load_dict({**clean, "sky": sunsky_dict(spec), **surfaces})
+        clean_scene = mi.load_dict({**clean, "sky": sky_dict(spec), **surfaces})
     loaded = mi.load_dict(scene)
     params = mi.traverse(loaded)
     shape_ids: dict[int, int] = {}
