@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from .cpus import usable_cpus
+
 
 @contextmanager
 def atomic_target(path: Path) -> Iterator[Path]:
@@ -69,11 +71,9 @@ def _use_exr_threads(openexr: Any) -> None:
 
 
 def cores() -> int:
-    """CPUs this process may use: its affinity where the system reports one, else the
-    machine's count (at least 1)."""
-    if hasattr(os, "sched_getaffinity"):
-        return max(1, len(os.sched_getaffinity(0)))
-    return os.cpu_count() or 1
+    """CPUs this process may use: its affinity and its cgroup CPU quota, the smaller, at
+    least 1 (:func:`seahaze.cpus.usable_cpus`)."""
+    return usable_cpus()
 
 
 def _exr_write_error(path: Path, err: RuntimeError) -> OSError:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ..cpus import render_threads, usable_cpus
 from ..dataset.layout import Layout
 from ..dataset.writer import write_scene
 from ..interrupts import STOP_SIGNALS, WAIT_STEP_S, stoppable
@@ -56,7 +57,8 @@ Outcome = tuple[str, "SceneDone | BaseException"]
 
 
 class _InProcess:
-    """Scenes rendered one after another in this process (``--workers 1``)."""
+    """Scenes rendered one after another in this process (``--workers 1``), drjit's pool at
+    ``threads`` threads (None: the CPUs this process may use) while they render."""
 
     def __init__(
         self,
@@ -64,8 +66,10 @@ class _InProcess:
         root: Path,
         note: Callable[[str], None],
         tick: Callable[[], None] | None = None,
+        threads: int | None = None,
     ):
         self.jobs, self.root, self.note, self.tick = jobs, root, note, tick
+        self.threads = threads
         self._stop = False
         self._signals = STOP_SIGNALS
 
@@ -76,10 +80,13 @@ class _InProcess:
         self._signals = (signal.SIGTERM,) if ignored else STOP_SIGNALS
         restore = _flag_ignored_sigint(signalled)
         try:
-            for job in self.jobs:
-                if self._stop:
-                    return
-                yield job.name, self._render(job, signalled)
+            # Threads matched to the CPUs this process may use: drjit's default is every core
+            # of the machine, and its kernels wait for their slowest thread.
+            with render_threads(self.threads):
+                for job in self.jobs:
+                    if self._stop:
+                        return
+                    yield job.name, self._render(job, signalled)
         finally:
             restore()
 
@@ -142,7 +149,7 @@ def _worker_init(parent_pid: int, threads: int) -> None:
         os.environ.setdefault("DRJIT_LIBLLVM_PATH", llvm)
     import drjit as dr
 
-    # K workers on N cores: N/K threads each, not N each (oversubscription slows all of them).
+    # K workers on N CPUs: N/K threads each, not N each (oversubscription slows all of them).
     dr.set_thread_count(threads)
 
     def watch() -> None:
@@ -154,8 +161,16 @@ def _worker_init(parent_pid: int, threads: int) -> None:
     threading.Thread(target=watch, daemon=True, name="seahaze-parent-watch").start()
 
 
+def threads_per_worker(workers: int, threads: int | None = None) -> int:
+    """drjit threads of each of ``workers`` local worker processes: ``threads`` in all (None:
+    the CPUs this process may use, affinity and cgroup quota) shared evenly, at least 1."""
+    total = threads if threads is not None else usable_cpus()
+    return max(1, total // max(1, workers))
+
+
 class _LocalPool:
-    """Scenes rendered in ``workers`` spawned processes (Mitsuba and drjit are not fork-safe)."""
+    """Scenes rendered in ``workers`` spawned processes (Mitsuba and drjit are not fork-safe),
+    ``threads`` drjit threads in all (None: the CPUs this process may use)."""
 
     def __init__(
         self,
@@ -163,17 +178,17 @@ class _LocalPool:
         root: Path,
         workers: int,
         tick: Callable[[], None] | None = None,
+        threads: int | None = None,
     ):
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
         self.tick = tick
-        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
         self.executor = ProcessPoolExecutor(
             max_workers=workers,
             mp_context=multiprocessing.get_context("spawn"),
             initializer=_worker_init,
-            initargs=(os.getpid(), max(1, (cores or 1) // workers)),
+            initargs=(os.getpid(), threads_per_worker(workers, threads)),
         )
         self.futures = {
             self.executor.submit(
@@ -270,13 +285,16 @@ def start_executor(
     client: Any,
     note: Callable[[str], None],
     tick: Callable[[], None] | None = None,
+    threads: int | None = None,
 ) -> Executor:
     """The executor for ``jobs``: the Dask cluster of ``client`` when given, else ``workers``
     local processes (more than one), else this process (``note`` gets its per-pass messages).
     Local executors call ``tick`` every :data:`~seahaze.interrupts.WAIT_STEP_S` while they
-    wait (progress between scenes)."""
+    wait (progress between scenes) and render with ``threads`` drjit threads in all (None:
+    the CPUs this process may use, :func:`seahaze.cpus.usable_cpus`); a Dask worker keeps
+    its own."""
     if client is not None:
         return _DaskCluster(jobs, root, client)
     if workers > 1 and len(jobs) > 1:
-        return _LocalPool(jobs, root, min(workers, len(jobs)), tick)
-    return _InProcess(jobs, root, note, tick)
+        return _LocalPool(jobs, root, min(workers, len(jobs)), tick, threads)
+    return _InProcess(jobs, root, note, tick, threads)

@@ -96,6 +96,9 @@ class BatchOptions:
     dask_wait: float = DASK_WAIT_S
     """Seconds to wait for a first worker of a Dask scheduler that has none."""
     force: bool = False
+    threads: int | None = None
+    """drjit threads of the local renders, shared by the workers (None: the CPUs this process
+    may use, :func:`seahaze.cpus.usable_cpus`); a Dask worker keeps its own."""
 
 
 def run_batch(
@@ -412,6 +415,7 @@ def render_pending(
             client,
             reporter.pass_note,
             reporter.heartbeat,
+            options.threads,
         )
         for name, outcome in runner.results():
             stopping = stop is None

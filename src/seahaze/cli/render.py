@@ -34,6 +34,18 @@ def _scene_paths(items: list[str]) -> list[str]:
     return paths
 
 
+def parse_threads_flag(text: str | None) -> int | None:
+    """``--threads`` as a thread count (None when not given); a bad value is bad input."""
+    from ..cpus import parse_threads
+
+    if text is None:
+        return None
+    try:
+        return parse_threads(text)
+    except ValueError as err:
+        raise UsageError(f"--threads {text!r}: {err}") from None
+
+
 def _check_batch_args(args: argparse.Namespace) -> None:
     """Reject batch flags that do not fit together, before any scene file is read."""
     from ..render.variant import SUPPORTED_VARIANTS
@@ -64,6 +76,10 @@ def _check_batch_args(args: argparse.Namespace) -> None:
         if args.workers is not None:
             raise UsageError(
                 "--workers is for --executor local; a Dask cluster's size is its workers"
+            )
+        if args.threads is not None:
+            raise UsageError(
+                "--threads is for --executor local; a Dask worker renders with its own threads"
             )
         if args.dask_wait is not None and not 0.0 < args.dask_wait <= 86400.0:
             raise UsageError(
@@ -246,6 +262,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     from ..spec import OverrideError, with_overrides
 
     _check_batch_args(args)
+    threads = parse_threads_flag(args.threads)
     out = Path(args.out)
     folder = _check_out(out)
     paths = _scene_paths(args.scenes or [str(DEFAULT_SCENE)])
@@ -330,6 +347,7 @@ def cmd_render(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         **({"dask_wait": args.dask_wait} if args.dask_wait is not None else {}),
         force=args.force,
+        threads=threads,
     )
     try:
         report = run_batch(plan, out, options, reporter)
@@ -466,6 +484,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         type=int,
         metavar="K",
         help="render K scenes at once in local worker processes (default 1: in this process)",
+    )
+    parser.add_argument(
+        "--threads",
+        metavar="N",
+        help="render threads in all, shared by the --workers (1..4 per CPU of the machine; "
+        "default: the CPUs this process may use, its affinity and cgroup CPU quota); on a "
+        "machine others load, fewer threads than CPUs can finish sooner (docs/benchmarks.md)",
     )
     parser.add_argument(
         "--executor",

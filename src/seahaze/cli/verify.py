@@ -9,6 +9,7 @@ from pathlib import Path
 from ..spec import RENDER_MODES
 from .common import DEFAULT_SCENE, UsageError, load_scenes, parse_res, parse_vis
 from .limits import MAX_SAMPLES_PER_IMAGE
+from .render import parse_threads_flag
 
 DEFAULT_VERIFY_OUT = Path("out/verify")
 
@@ -19,6 +20,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
     Exit code 0 when every level is within the tolerance, 1 when one is not, 2 on bad input.
     """
     from .. import verify
+    from ..cpus import render_threads
     from ..interrupts import stoppable
     from ..render.variant import VariantError
     from ..spec import SceneSpec
@@ -27,6 +29,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
     blocking = next((p for p in (out, *out.parents) if p.exists()), None)
     if blocking is not None and not blocking.is_dir():
         raise UsageError(f"--out {out}: {blocking} is a file, not a folder")
+    threads = parse_threads_flag(args.threads)
     levels = parse_vis(args.vis) or [verify.DEFAULT_VISIBILITY_M]
     resolution = verify.DEFAULT_RESOLUTION
     if args.resolution is not None:
@@ -69,7 +72,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
             target_width_deg=args.target_width,
             denoise=args.denoise == "on",
         )
-        with stoppable():
+        with stoppable(), render_threads(threads):
             report = verify.run_verify(base, levels, settings, progress=say, keep=measurements)
     except (verify.VerifyInputError, VariantError, ValueError) as err:
         raise UsageError(str(err)) from None
@@ -175,6 +178,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         choices=["off", "on"],
         default="off",
         help="measure denoised images, as render.denoise on writes them (needs pyoidn)",
+    )
+    parser.add_argument(
+        "--threads",
+        metavar="N",
+        help="render threads (1..4 per CPU of the machine; default: the CPUs this process may "
+        "use, its affinity and cgroup CPU quota)",
     )
     parser.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
     parser.set_defaults(func=cmd_verify)
