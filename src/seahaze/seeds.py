@@ -43,6 +43,10 @@ class Stream(IntEnum):
     # The haze (seahaze.haze_field)
     HAZE_PATCHES = 14
     """The lattice values of the haze's patches (``haze.patches``)."""
+    # The camera model (seahaze.camera_model)
+    CAMERA_NOISE = 15
+    """The sensor noise of a scene's PNGs, one realisation for its clean image and every level
+    (``render.camera_model``)."""
 
 
 class RenderPass(IntEnum):
@@ -109,8 +113,21 @@ def dither_seed(master: int, scene: str, level: str) -> np.random.SeedSequence:
     give two of a batch's 10^5 scene names the same key), so every image of a dataset, and the
     same image under another seed, gets its own noise.
     """
+    return np.random.SeedSequence([master, int(Stream.DITHER), _name_key(scene), _name_key(level)])
 
-    def key(name: str) -> int:
-        return int.from_bytes(hashlib.sha256(name.encode("utf-8")).digest()[:16], "little")
 
-    return np.random.SeedSequence([master, int(Stream.DITHER), key(scene), key(level)])
+def camera_noise_seed(master: int, scene: str) -> np.random.SeedSequence:
+    """The seed of the sensor noise of scene ``scene`` whose master seed is ``master``
+    (``render.camera_model``).
+
+    The level is not part of it: the clean image and every hazy level of a scene share one
+    noise realisation per pixel (common random numbers), so the difference between two levels'
+    PNGs is the haze's, not the noise's. The scene's name enters as in :func:`dither_seed`, so
+    every scene (and every frame of a sequence) gets its own noise.
+    """
+    return np.random.SeedSequence([master, int(Stream.CAMERA_NOISE), _name_key(scene)])
+
+
+def _name_key(name: str) -> int:
+    """A 128-bit key of ``name``: the first 16 bytes of its SHA-256, little-endian."""
+    return int.from_bytes(hashlib.sha256(name.encode("utf-8")).digest()[:16], "little")

@@ -814,6 +814,60 @@ class EstimatorSpec(_Spec):
     )
 
 
+class CameraModelSpec(_Spec):
+    """A camera's character on the PNGs (seahaze.camera_model): lens blur and veiling glare,
+    sensor shot and read noise, JPEG compression. Applied the same way to the clean image and
+    every level; the EXRs stay the linear, noise-free radiance (docs/dataset-format.md)."""
+
+    psf_sigma_px: float = Field(
+        0.6,
+        ge=0.0,
+        le=8.0,
+        description="Standard deviation of the lens's Gaussian core (a discrete Gaussian, "
+        "whose second moment is exactly this); 0: no core blur. Diffraction alone gives "
+        "0.42·λ·N, 0.54 px at f/8 for 550 nm and 3.45 µm pixels (docs/physics.md).",
+        json_schema_extra=_unit("px"),
+    )
+    halo_fraction: float = Field(
+        0.0,
+        ge=0.0,
+        le=0.5,
+        description="Share of each pixel's light spread into a wide halo, the veiling glare of "
+        "lens and housing (ISO 9358; 0.01–0.05 for camera lenses); 0: none.",
+    )
+    halo_sigma_px: float = Field(
+        30.0,
+        ge=1.0,
+        le=500.0,
+        description="Standard deviation of the veiling-glare halo (a discrete Gaussian).",
+        json_schema_extra=_unit("px"),
+    )
+    full_well_e: float | None = Field(
+        10700.0,
+        ge=100.0,
+        le=1.0e6,
+        description="Electrons a pixel collects at the PNG's white (linear 1 after exposure): "
+        "the saturation capacity at base gain, less at a higher gain; it sets the shot noise. "
+        "Default: Sony IMX250 (3.45 µm pixels). null: no sensor noise.",
+        json_schema_extra=_unit("e-"),
+    )
+    read_noise_e: float = Field(
+        1.8,
+        ge=0.0,
+        le=100.0,
+        description="Temporal dark (read) noise, RMS (EMVA 1288; IMX250 about 1.8, IMX174 "
+        "6.8). Ignored without `full_well_e`.",
+        json_schema_extra=_unit("e-"),
+    )
+    jpeg_quality: int | None = Field(
+        None,
+        ge=1,
+        le=95,
+        description="JPEG quality (Pillow, 4:2:0 chroma): each PNG holds the decoded JPEG of "
+        "its pixels, so the dataset stays PNG. null: no compression.",
+    )
+
+
 class RenderSpec(_Spec):
     """How the scene is rendered."""
 
@@ -885,6 +939,13 @@ class RenderSpec(_Spec):
         "The EXRs are not touched. See docs/dataset-format.md and docs/benchmarks.md, "
         '"Why are the PNGs dithered?".',
     )
+    camera_model: CameraModelSpec | None = Field(
+        None,
+        description="A camera's blur, noise and compression on every PNG (clean and levels "
+        "alike, seeded from `render.seed` and the scene: the same config gives the same "
+        "bytes); `{}` for a typical machine-vision camera, null (default) for none. The EXRs "
+        'are not touched. See docs/dataset-format.md, "The camera model".',
+    )
 
     @field_validator("denoise", "dither", mode="before")
     @classmethod
@@ -898,6 +959,8 @@ class RenderSpec(_Spec):
         data = handler(self)
         if self.dither == "on":
             data.pop("dither", None)
+        if self.camera_model is None:  # likewise for configs recorded before the camera model
+            data.pop("camera_model", None)
         return data
 
     @field_validator("exposure")
