@@ -183,7 +183,7 @@ def _provenance(data: dict[str, Any]) -> str:
   hash means the same configuration)
 - render mode `{config.get("mode")}`, spp {config.get("spp")}, resolution
   {"×".join(str(v) for v in config.get("resolution", []))} pixels
-- splits: {how}
+{_camera_model(data)}- splits: {how}
 - an equivalent command (each scene file named after its `name:`; every scene's full
   configuration is in `dataset.json`):
 
@@ -191,6 +191,21 @@ def _provenance(data: dict[str, Any]) -> str:
 {equivalent_command(data)}
 ```
 """
+
+
+def _camera_model(data: dict[str, Any]) -> str:
+    """The card's line on the scenes' ``render.camera_model``, or nothing where no scene has
+    one (the card of a dataset without it reads as before it existed)."""
+    configs = [(e.get("config") or {}).get("render") or {} for e in data["scenes"].values()]
+    used = [c["camera_model"] for c in configs if c.get("camera_model") is not None]
+    if not used:
+        return ""
+    scope = "every scene" if len(used) == len(configs) else f"{len(used)} of {len(configs)} scenes"
+    if len({json.dumps(c, sort_keys=True) for c in used}) > 1:
+        settings = "settings per scene in `dataset.json`"
+    else:
+        settings = ", ".join(f"{key} {value}" for key, value in used[0].items())
+    return f"- camera model ({scope}; clean and every level alike, EXRs without it): {settings}\n"
 
 
 def _levels(data: dict[str, Any]) -> str:

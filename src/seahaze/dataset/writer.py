@@ -3,9 +3,11 @@
 Images are the linear radiance exposed with the scene's one exposure and sRGB-encoded
 (:mod:`seahaze.imaging`), dithered as ``meta``'s ``render`` record says (``render.dither``:
 each image with its own seed, from the scene's seed, its name and the level; a record without
-it, the nearest code); with ``write_exr`` the linear radiance is written too, and each hazy
-level's per-pixel transmittance, optical depth and effective visibility
-(``transmission/<level>/``, :mod:`seahaze.render.transmission`). Every level gets
+it, the nearest code); when the record has a ``camera_model`` (``render.camera_model``) they
+are first blurred, given sensor noise and compressed as a camera would
+(:mod:`seahaze.camera_model`). With ``write_exr`` the linear radiance is written too (without
+the camera model), and each hazy level's per-pixel transmittance, optical depth and effective
+visibility (``transmission/<level>/``, :mod:`seahaze.render.transmission`). Every level gets
 the same label file: the boxes do not depend on the haze (the MSVD paper's protocol). With
 ``labels.write_visible`` each level also gets the labels of the vessels seen in its image
 (``labels_visible/<level>/``, :mod:`seahaze.visible`).
@@ -17,7 +19,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from .. import fileio, imaging
+from .. import camera_model, fileio
 from ..render.engine import RenderedLevel, SceneRender
 from ..visibility import CLEAN_LEVEL
 from .layout import Layout
@@ -54,8 +56,8 @@ def _write_image(
 ) -> None:
     """The PNG of ``shown`` (denoised when denoising is on) and the EXR of the rendered,
     undenoised ``radiance``."""
-    dither = imaging.png_dither(scene.meta.get("render", {}), scene.name, level)
-    image8 = imaging.to_srgb8(shown, scene.exposure, dither)
+    render = scene.meta.get("render", {})
+    image8 = camera_model.png_pixels(shown, scene.exposure, render, scene.name, level)
     fileio.write_png(layout.image(level, scene.name), image8)
     if scene.write_exr:
         fileio.write_rgb_exr(layout.exr(level, scene.name), radiance)

@@ -474,7 +474,8 @@ def _visible_labels(
 def render_meta(spec: SceneSpec) -> dict[str, Any]:
     """``meta``'s ``render`` entry: the samples actually taken, the ``physical`` mode's
     estimator settings and vessel-light pass (its samples per pixel and smoothing radius),
-    what the denoiser did and how the PNGs are dithered."""
+    what the denoiser did, how the PNGs are dithered and the camera model they went through."""
+    from ..camera_model import camera_model_meta
     from . import denoise
     from .estimator import settings_from
     from .physical import stratified_spp, vessel_light_spp
@@ -487,6 +488,8 @@ def render_meta(spec: SceneSpec) -> dict[str, Any]:
         "denoise": spec.render.denoise,
         # How the writer quantises the PNGs (imaging.png_dither reads it back).
         **imaging.dither_meta(spec.render.dither, spec.render.seed),
+        # The writer's camera model (camera_model.png_pixels reads it back); none: no key.
+        **camera_model_meta(spec.render.camera_model, spec.render.seed),
     }
     settings = settings_from(spec.render.estimator)
     if physical:
