@@ -16,7 +16,12 @@ from seahaze.vessels import (
     place_on_sea,
     sample_layout,
 )
-from seahaze.vessels.layout import footprint_corners, sample_distance
+from seahaze.vessels.layout import (
+    bearing_interval,
+    footprint_corners,
+    image_overlap,
+    sample_distance,
+)
 
 try:  # hypothesis is a test extra; the seed-loop property tests below run without it
     from hypothesis import given, settings
@@ -344,3 +349,68 @@ def test_sea_callbacks_receive_arrays_like_an_ocean_surface(tug) -> None:
     assert calls and all(len(sx) == 1 and sx == sy for sx, sy in calls)
     z_min = min(p.vertices[:, 2].min() for p in placed)
     assert np.isfinite(z_min)
+
+
+# --------------------------------------------------------------------------- image overlap
+def _angles_seen(placement: Placement) -> np.ndarray:
+    """The azimuths (deg, 0..360) of a footprint's corners seen from the camera at the origin:
+    an independent route to its bearing interval (the tests keep vessels away from 0/360)."""
+    corners = footprint_corners(placement)
+    return np.degrees(np.arctan2(corners[:, 1], corners[:, 0])) % 360.0
+
+
+def test_image_overlap_is_the_shared_share_of_the_narrower_interval() -> None:
+    assert image_overlap((0.0, 1.0), (0.5, 2.0)) == pytest.approx(0.5)
+    assert image_overlap((0.0, 1.0), (0.2, 0.4)) == pytest.approx(1.0)
+    assert image_overlap((0.0, 1.0), (1.5, 2.0)) == 0.0
+    # Across ±π: (π - 0.2, π + 0.1) and (-π - 0.1, -π + 0.3) share 0.2 rad of the first 0.3.
+    a, b = (np.pi - 0.2, np.pi + 0.1), (-np.pi - 0.1, -np.pi + 0.3)
+    assert image_overlap(a, b) == pytest.approx(0.2 / 0.3)
+
+
+def test_bearing_interval_spans_the_footprints_corners() -> None:
+    tug = Placement("tug", 0.0, 300.0, 30.0, 30.0, 300.0, 90.0)
+    lo, hi = bearing_interval(footprint_corners(tug))
+    seen = _angles_seen(tug)
+    assert np.degrees(lo) == pytest.approx(seen.min()) and np.degrees(hi) == pytest.approx(
+        seen.max()
+    )
+    # Behind the camera, across ±180°: one short interval around 180°, not a whole circle.
+    astern = Placement("tug", -300.0, 0.0, 90.0, 30.0, 300.0, 180.0)
+    lo, hi = bearing_interval(footprint_corners(astern))
+    assert 0.0 < hi - lo < np.radians(10.0) and abs(0.5 * (lo + hi)) == pytest.approx(
+        np.pi, abs=0.05
+    )
+
+
+def _shared(a: Placement, b: Placement) -> float:
+    """The share of the narrower corner-angle interval the two share (degrees, no wrap)."""
+    sa, sb = _angles_seen(a), _angles_seen(b)
+    shared = min(sa.max(), sb.max()) - max(sa.min(), sb.min())
+    return max(shared, 0.0) / min(np.ptp(sa), np.ptp(sb))
+
+
+def test_sampled_vessels_keep_apart_in_the_image_when_asked() -> None:
+    crowded = dict(
+        count=6, distance_range_m=(200.0, 2000.0), bearing_spread_deg=60.0, camera_heading_deg=90.0
+    )
+    overlapping = 0
+    for seed in range(10):
+        free = _sample(seed, **crowded)
+        overlapping += sum(_shared(a, b) > 0.1 for i, a in enumerate(free) for b in free[i + 1 :])
+        kept = _sample(seed, **crowded, max_image_overlap=0.1)
+        assert len(kept) == 6
+        assert all(_shared(a, b) <= 0.1 + 1e-9 for i, a in enumerate(kept) for b in kept[i + 1 :])
+    assert overlapping > 0  # the rule had work to do: without it these layouts overlap
+
+
+def test_a_layout_the_overlap_rule_cannot_meet_says_so() -> None:
+    with pytest.raises(LayoutError, match="raise max_image_overlap"):
+        # Twelve hulls 150-160 m off within 5° cannot all stand side by side in the image.
+        _sample(
+            1,
+            count=12,
+            distance_range_m=(150.0, 160.0),
+            bearing_spread_deg=5.0,
+            max_image_overlap=0.0,
+        )

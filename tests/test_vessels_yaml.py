@@ -248,3 +248,19 @@ def test_follow_slope_pitches_and_rolls_the_hull_to_the_sea() -> None:
     bow, side = rotation @ fwd, rotation @ port
     assert bow[2] == pytest.approx(np.sin(pitch), abs=1e-5)  # bow up by the pitch
     assert side[2] == pytest.approx(np.cos(pitch) * np.sin(roll), abs=1e-5)  # port up by roll
+
+
+def test_image_overlap_outside_zero_to_one_names_the_field_and_range() -> None:
+    text = "vessels:\n  sample:\n    count: 3\n    max_image_overlap: 1.5\n"
+    with pytest.raises(SceneFileError) as info:
+        parse_scene_text(text, "o.yaml")
+    message = str(info.value)
+    assert message.startswith("o.yaml:4: vessels.sample.max_image_overlap"), message
+    assert "less than or equal to 1" in message and "\n" not in message
+
+
+def test_a_sampler_without_the_overlap_rule_records_no_such_field() -> None:
+    spec = parse_scene_text("vessels:\n  sample:\n    count: 3\n", "o.yaml")
+    assert "max_image_overlap" not in spec.model_dump(mode="json")["vessels"]["sample"]
+    kept = parse_scene_text("vessels:\n  sample: {count: 3, max_image_overlap: 0.2}\n", "o.yaml")
+    assert kept.model_dump(mode="json")["vessels"]["sample"]["max_image_overlap"] == 0.2

@@ -469,9 +469,27 @@ class VesselSampler(_Spec):
         description="Minimum clearance between hull footprints.",
         json_schema_extra=_unit("m"),
     )
+    max_image_overlap: float | None = Field(
+        None,
+        ge=0.0,
+        le=1.0,
+        description="Most a vessel may overlap another in the image: the share of the narrower "
+        "one's bearing interval (the angles its footprint spans, seen from the camera) that "
+        "the two share; 0 keeps them side by side, as traffic seen from a ship mostly is. "
+        "Default: no such rule (vessels apart on the water may still hide each other).",
+        json_schema_extra=_unit("1"),
+    )
     seed: int | None = Field(
         None, ge=0, description="Seed of the layout; default derived from `render.seed`."
     )
+
+    @model_serializer(mode="wrap")
+    def _omit_unset_overlap(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # Without the rule a recorded config stays byte-identical to before it existed.
+        data = handler(self)
+        if self.max_image_overlap is None:
+            data.pop("max_image_overlap", None)
+        return data
 
     @model_validator(mode="after")
     def _ordered_range(self) -> VesselSampler:

@@ -337,6 +337,7 @@ def layout_vessels(
             rng=rng,
             horizontal_fov_deg=camera.fov_deg,
             existing=placements,
+            max_image_overlap=sampler.max_image_overlap,
         )
     return placements
 

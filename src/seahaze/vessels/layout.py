@@ -21,6 +21,15 @@ samples; a user mesh uses its real beam), grown by ``min_separation_m / 2`` on e
 Two vessels overlap when their grown rectangles intersect (separating-axis test). A rectangle
 may not contain the camera.
 
+Overlap in the image (``max_image_overlap``)
+--------------------------------------------
+Traffic keeps vessels apart on the water, and a camera sees them apart too: two sampled vessels
+at one range seldom hide each other. With ``max_image_overlap`` set, a candidate is also
+rejected when its **bearing interval** (the angles, seen from the camera, that its footprint
+rectangle spans) overlaps an accepted vessel's by more than that fraction of the narrower of
+the two — the horizontal overlap of their boxes in the image, the hull's height aside. 0 keeps
+every pair side by side in the image; None (the default) leaves the rule out.
+
 Distance distributions (``distance_range_m = (d_min, d_max)``)
 --------------------------------------------------------------
 - ``"uniform"``: d uniform in [d_min, d_max] (equal count per metre of range).
@@ -117,6 +126,11 @@ class PlacedPart(NamedTuple):
     material: Material
 
 
+LAYOUT_RESTARTS = 50
+"""Whole layouts drawn at most under the image-overlap rule before :func:`sample_layout` gives
+up (1 without the rule)."""
+
+
 # --------------------------------------------------------------------------- footprints
 def _footprint_beam(placement: Placement) -> float:
     if placement.beam_m is not None:
@@ -146,6 +160,26 @@ def footprints_overlap(a: np.ndarray, b: np.ndarray) -> bool:
             if pa.max() < pb.min() or pb.max() < pa.min():
                 return False
     return True
+
+
+def bearing_interval(corners: np.ndarray) -> tuple[float, float]:
+    """The interval of azimuths (rad, counter-clockwise from +x) that a footprint's (4, 2)
+    world corners span as seen from the camera at the origin; unwrapped around its first
+    corner, so an interval across ±π stays one interval."""
+    angles = np.arctan2(corners[:, 1], corners[:, 0])
+    unwrapped = angles[0] + np.angle(np.exp(1j * (angles - angles[0])))
+    return float(unwrapped.min()), float(unwrapped.max())
+
+
+def image_overlap(a: tuple[float, float], b: tuple[float, float]) -> float:
+    """How much two bearing intervals overlap, as a fraction (0–1) of the narrower one; both
+    are taken around ``a`` (an overlap across ±π counts)."""
+    shift = 2.0 * np.pi * np.round((0.5 * (a[0] + a[1]) - 0.5 * (b[0] + b[1])) / (2.0 * np.pi))
+    lo, hi = max(a[0], b[0] + shift), min(a[1], b[1] + shift)
+    narrower = min(a[1] - a[0], b[1] - b[0])
+    if narrower <= 0.0:
+        return 0.0
+    return float(np.clip((hi - lo) / narrower, 0.0, 1.0))
 
 
 def _contains_origin(corners: np.ndarray) -> bool:
@@ -317,6 +351,7 @@ def sample_layout(
     horizontal_fov_deg: float | None = None,
     max_attempts_per_vessel: int = 200,
     existing: Sequence[Placement] = (),
+    max_image_overlap: float | None = None,
 ) -> list[Placement]:
     """Sample ``count`` non-overlapping vessels around the camera (rejection sampling).
 
@@ -326,8 +361,9 @@ def sample_layout(
     ``horizontal_fov_deg`` when given), heading (uniform in [0, 360)). A candidate is
     rejected if its footprint (grown by ``min_separation_m``/2) overlaps an accepted one or
     covers the camera, or overlaps one of the ``existing`` placements (explicit vessels of the
-    same scene); after ``max_attempts_per_vessel`` rejections a :class:`LayoutError`
-    says how many vessels fitted. Same ``rng`` state → same layout.
+    same scene), or, with ``max_image_overlap``, hides more than that fraction of one of them
+    in the image (module docstring); after ``max_attempts_per_vessel`` rejections a
+    :class:`LayoutError` says how many vessels fitted. Same ``rng`` state → same layout.
     """
     if count < 0:
         raise ValueError(f"count must be >= 0, got {count}")
@@ -339,33 +375,50 @@ def sample_layout(
         )
     kinds, probs = _normalised_weights(class_weights)
     margin = 0.5 * max(min_separation_m, 0.0)
-    placements: list[Placement] = []
-    corners: list[np.ndarray] = [footprint_corners(p, margin) for p in existing]
-    for index in range(count):
-        for _attempt in range(max_attempts_per_vessel):
-            kind = kinds[int(rng.choice(len(kinds), p=probs))]
-            length = _sample_length(kind, rng)
-            distance = sample_distance(distance_range_m, distribution, rng)
-            half = _bearing_half_range(bearing_spread_deg, horizontal_fov_deg, length, distance)
-            bearing = float(rng.uniform(-half, half))
-            heading = float(rng.uniform(0.0, 360.0))
-            candidate = _placement(kind, distance, bearing, heading, length, camera_heading_deg)
-            cand_corners = footprint_corners(candidate, margin)
-            if _contains_origin(cand_corners):
-                continue
-            if any(footprints_overlap(cand_corners, c) for c in corners):
-                continue
-            placements.append(candidate)
-            corners.append(cand_corners)
-            break
+    # The image rule can corner a layout (a long hull near the camera spans much of the view):
+    # then the whole layout is drawn again, from where the generator stands. Without the rule
+    # one try, so its layouts draw exactly what they always drew.
+    tries = 1 if max_image_overlap is None else LAYOUT_RESTARTS
+    for _try in range(tries):
+        placements: list[Placement] = []
+        corners: list[np.ndarray] = [footprint_corners(p, margin) for p in existing]
+        seen = [bearing_interval(footprint_corners(p)) for p in existing]
+        for _vessel in range(count):
+            for _attempt in range(max_attempts_per_vessel):
+                kind = kinds[int(rng.choice(len(kinds), p=probs))]
+                length = _sample_length(kind, rng)
+                distance = sample_distance(distance_range_m, distribution, rng)
+                half = _bearing_half_range(bearing_spread_deg, horizontal_fov_deg, length, distance)
+                bearing = float(rng.uniform(-half, half))
+                heading = float(rng.uniform(0.0, 360.0))
+                candidate = _placement(kind, distance, bearing, heading, length, camera_heading_deg)
+                cand_corners = footprint_corners(candidate, margin)
+                if _contains_origin(cand_corners):
+                    continue
+                if any(footprints_overlap(cand_corners, c) for c in corners):
+                    continue
+                interval = bearing_interval(footprint_corners(candidate))
+                if max_image_overlap is not None and any(
+                    image_overlap(interval, other) > max_image_overlap for other in seen
+                ):
+                    continue
+                placements.append(candidate)
+                corners.append(cand_corners)
+                seen.append(interval)
+                break
+            else:
+                break  # this vessel found no place: the layout failed
         else:
-            raise LayoutError(
-                f"could not place vessel {index + 1} of {count} after {max_attempts_per_vessel} "
-                f"attempts (distance {distance_range_m} m, bearing spread "
-                f"{bearing_spread_deg:g}°, min separation {min_separation_m:g} m): widen the "
-                f"ranges, lower the count or the separation"
-            )
-    return placements
+            return placements
+    overlap = "" if max_image_overlap is None else f", image overlap {max_image_overlap:g}"
+    again = "" if tries == 1 else f" in each of {tries} layouts"
+    raise LayoutError(
+        f"could not place vessel {len(placements) + 1} of {count} after "
+        f"{max_attempts_per_vessel} attempts{again} (distance {distance_range_m} m, bearing spread "
+        f"{bearing_spread_deg:g}°, min separation {min_separation_m:g} m{overlap}): widen "
+        f"the ranges, lower the count or the separation"
+        + ("" if max_image_overlap is None else " or raise max_image_overlap")
+    )
 
 
 # --------------------------------------------------------------------------- to world
