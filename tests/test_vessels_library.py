@@ -163,6 +163,24 @@ def test_container_ship_carries_containers_and_a_bridge_above_them(built) -> Non
         assert model.part("superstructure").mesh.bounds[1, 2] > stack_top
 
 
+def test_containers_are_iso_boxes_in_many_liveries_mostly_the_lines(built) -> None:
+    # ISO 668: 40 ft = 12.19 m and 20 ft = 6.058 m long, 2.44 m wide, 2.59 m high (less the
+    # 2 cm tier clearance; a bottom tier also reaches 0.5 m down into the hatch coaming).
+    for seed in SEEDS:
+        stacks = [p for p in built[("container_ship", seed)].parts if p.name.startswith("cont")]
+        counts = {}
+        for part in stacks:
+            corners = np.asarray(part.mesh.vertices).reshape(-1, 8, 3)  # one box per 8 vertices
+            extent = corners.max(axis=1) - corners.min(axis=1)
+            assert np.all(np.isclose(extent[:, 0], 12.19) | np.isclose(extent[:, 0], 6.058))
+            np.testing.assert_allclose(extent[:, 1], 2.44)
+            assert np.all(np.isclose(extent[:, 2], 2.57) | np.isclose(extent[:, 2], 3.07))
+            counts[part.name] = len(corners)
+        total = sum(counts.values())
+        assert len(counts) >= 4 and total > 50
+        assert max(counts.values()) >= 0.25 * total  # the operating line's own boxes lead
+
+
 def test_sailboat_has_mast_taller_than_hull_length_and_keel_sets_draft(built) -> None:
     for seed in SEEDS:
         model = built[("sailboat", seed)]

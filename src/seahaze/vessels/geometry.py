@@ -256,6 +256,20 @@ def box(x0: float, x1: float, y0: float, y1: float, z0: float, z1: float) -> tri
     return trimesh.creation.box(bounds=np.array([lo, hi]))
 
 
+def boxes(lower: FloatArray, upper: FloatArray) -> trimesh.Trimesh:
+    """Many axis-aligned boxes as one mesh: box ``i`` spans ``lower[i]`` to ``upper[i]`` ((n, 3)
+    corners, m). Each is :func:`box`'s closed, outward-wound box; they share no vertex, so the
+    mesh is watertight however the boxes touch. Built in numpy (a ship's deck carries
+    thousands of containers)."""
+    lower, upper = np.asarray(lower, np.float64), np.asarray(upper, np.float64)
+    unit = trimesh.creation.box(bounds=np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]))
+    corners = np.asarray(unit.vertices)  # in [0, 1]^3
+    vertices = lower[:, None, :] + corners[None, :, :] * (upper - lower)[:, None, :]
+    offsets = np.arange(len(lower))[:, None, None] * len(corners)
+    faces = np.asarray(unit.faces)[None, :, :] + offsets
+    return trimesh.Trimesh(vertices.reshape(-1, 3), faces.reshape(-1, 3), process=False)
+
+
 def convex_body(points: FloatArray | Sequence[Sequence[float]]) -> trimesh.Trimesh:
     """Convex hull of a few points: a watertight, outward-wound body (keels, wedges)."""
     mesh = trimesh.convex.convex_hull(np.asarray(points, dtype=np.float64))

@@ -9,7 +9,9 @@ Proportions follow common naval-architecture practice for these types:
 - bridge visibility: SOLAS V/22.1.1 requires that the sea surface is visible from the
   conning position no more than two ship lengths or 500 m (the lesser) ahead of the bow;
   container stacks forward of an aft bridge are capped by that sight line below.
-- ISO 668 container: 12.19 m (40 ft) long, 2.44 m wide, 2.59 m (8 ft 6 in) high.
+- ISO 668 containers: 40 ft (12.19 m) and 20 ft (6.058 m) long, 2.44 m wide, 2.59 m
+  (8 ft 6 in) high, stacked in bays of one 40 ft or two 20 ft boxes, rows across the ship and
+  tiers up; each box is painted in its own line's livery.
 - deck heights of accommodation: about 2.8 m per deck.
 """
 
@@ -19,7 +21,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from seahaze.vessels.geometry import HullForm, box
+from seahaze.vessels.geometry import HullForm, box, boxes
 from seahaze.vessels.materials import (
     ANTIFOULING_REDS,
     CONTAINER_COLOURS,
@@ -46,6 +48,20 @@ __all__ = [
 CONTAINER_LENGTH_M = 12.19
 CONTAINER_WIDTH_M = 2.44
 CONTAINER_HEIGHT_M = 2.59
+CONTAINER_20FT_LENGTH_M = 6.058
+Corner = tuple[float, float, float]
+"""A box's corner (x, y, z), m."""
+TWENTY_FOOT_SHARE = 0.25
+"""Share of a bay's slots holding two 20 ft boxes instead of one 40 ft: on deck most boxes are
+40 ft, as most of the world's fleet of boxes is (in TEU, 40 ft units carry about two thirds
+of the trade)."""
+LINE_SHARE_RANGE = (0.3, 0.7)
+"""Share of a ship's boxes in its operating line's own livery (drawn per ship): a liner
+carries mostly its own line's boxes among leased and partners' ones."""
+CONTAINER_GAP_M = (0.06, 0.02, 0.076)
+"""Gaps between neighbouring boxes: across rows (m), between tiers (the corner castings'
+clearance, so no two boxes share a vertex), and between the two 20 ft boxes of a 40 ft slot
+(ISO 668's 3 in)."""
 DECK_HEIGHT_M = 2.8
 LIFEBOAT_ORANGE = material_from_srgb8("lifeboat_orange", (235, 100, 20), 0.5)
 
@@ -275,14 +291,22 @@ def _add_container_stacks(
     keep_out: list[tuple[float, float]],
     sight_limit: Callable[[float], float],
 ) -> None:
-    """Fill the deck with 40 ft bays, two stacks across, random tiers and liveries.
+    """Fill the deck with 40 ft bays of containers: rows across, tiers up, box by box.
 
-    Each stack is one box (its top silhouette is what matters at a few pixels per metre);
-    bays are separated by lashing-bridge gaps so no two boxes share a vertex.
+    A bay holds one or two stacks across (two on a wide ship, split at the centreline); a
+    stack's rows have their own heights (a row one tier short now and then) and each slot is
+    one 40 ft box or two 20 ft boxes, each painted in the ship's line's livery (a share drawn
+    in :data:`LINE_SHARE_RANGE`) or another from :data:`CONTAINER_COLOURS`, so from afar the
+    deck reads as the patchwork of colours real ships carry. Bays are separated by
+    lashing-bridge gaps.
     """
     x_front = form.half_length - form.forecastle_length - 2.0
     x_end = -form.half_length + 0.05 * form.length
     gap = u(rng, 0.8, 1.4)
+    row_pitch = CONTAINER_WIDTH_M + CONTAINER_GAP_M[0]
+    line = pick_material(CONTAINER_COLOURS, rng, jitter=0.0)
+    line_share = u(rng, *LINE_SHARE_RANGE)
+    by_colour: dict[str, tuple[Material, list[Corner], list[Corner]]] = {}
     x1 = x_front
     while x1 - CONTAINER_LENGTH_M > x_end:
         x0 = x1 - CONTAINER_LENGTH_M
@@ -293,10 +317,10 @@ def _add_container_stacks(
             continue
         x1 = x0 - gap
         half_avail = min_half_beam(form, *bay) - 0.5
-        rows = int(2.0 * half_avail // (CONTAINER_WIDTH_M + 0.06))
+        rows = int(2.0 * half_avail // row_pitch)
         if rows < 1:
             continue
-        width = rows * (CONTAINER_WIDTH_M + 0.06)
+        width = rows * row_pitch
         z_base = deck_range(form, *bay)[1] + coaming
         blocks = (
             [(-0.5 * width, -0.15), (0.15, 0.5 * width)]
@@ -311,12 +335,23 @@ def _add_container_stacks(
             tiers = min(tiers, allowed)
             if tiers < 1:
                 continue
-            colour = pick_material(CONTAINER_COLOURS, rng, jitter=0.0)
-            parts.add(
-                f"containers_{colour.name.removeprefix('container_')}",
-                box(x0, bay[1], y0, y1, z_base - 0.5, z_base + tiers * CONTAINER_HEIGHT_M),
-                colour,
-            )
+            for row in range(max(1, int((y1 - y0 + CONTAINER_GAP_M[0]) // row_pitch))):
+                ya = y0 + row * row_pitch
+                row_tiers = tiers - int(rng.random() < 0.2)
+                for tier in range(row_tiers):
+                    za = z_base + tier * CONTAINER_HEIGHT_M
+                    # The bottom tier sits 0.5 m into the coaming: no sky under the stack.
+                    bottom = za - 0.5 if tier == 0 else za
+                    top = za + CONTAINER_HEIGHT_M - CONTAINER_GAP_M[1]
+                    for xa, xb in _slot_boxes(bay, rng):
+                        colour = (
+                            line
+                            if rng.random() < line_share
+                            else pick_material(CONTAINER_COLOURS, rng, jitter=0.0)
+                        )
+                        entry = by_colour.setdefault(colour.name, (colour, [], []))
+                        entry[1].append((xa, ya, bottom))
+                        entry[2].append((xb, ya + CONTAINER_WIDTH_M, top))
         # Hatch cover under the stacks (also visible where a stack is missing).
         z_deck = deck_range(form, *bay)[0]
         parts.add(
@@ -324,6 +359,17 @@ def _add_container_stacks(
             box(x0 - 0.2, bay[1] + 0.2, -0.5 * width, 0.5 * width, z_deck - EMBED_M, z_base - 0.6),
             DECK_PAINTS[2],
         )
+    for name, (colour, lower, upper) in sorted(by_colour.items()):
+        parts.add(f"containers_{name.removeprefix('container_')}", boxes(lower, upper), colour)
+
+
+def _slot_boxes(bay: tuple[float, float], rng: np.random.Generator) -> list[tuple[float, float]]:
+    """The boxes of one 40 ft slot along the ship: one 40 ft box, or (a share
+    :data:`TWENTY_FOOT_SHARE` of slots) two 20 ft boxes with ISO 668's gap between them."""
+    x0, x1 = bay
+    if rng.random() >= TWENTY_FOOT_SHARE:
+        return [(x0, x1)]
+    return [(x0, x0 + CONTAINER_20FT_LENGTH_M), (x1 - CONTAINER_20FT_LENGTH_M, x1)]
 
 
 def _cargo_hull_with_aft_house(
