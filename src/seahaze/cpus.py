@@ -16,8 +16,9 @@ Two things bound it, and the smaller wins (at least 1):
 A quota of 1.5 CPUs gives 1 thread, not 2: threads that together use more than the quota are
 throttled for the rest of each period, and a kernel of drjit's waits at its end for its last
 thread. The load other processes put on a shared machine is not counted: it changes by the
-second, and the scheduler shares CPUs among threads, not processes (docs/benchmarks.md, "How
-does a render slow down on a loaded machine?").
+second, Linux shares the CPUs between sessions first (autogroups) and then among a session's
+threads, and on a loaded 2-vCPU machine a render at 1 thread was no faster than at 2, its CPU
+time the same (docs/benchmarks.md, "How does a render slow down on a loaded machine?").
 """
 
 from __future__ import annotations

@@ -489,8 +489,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--threads",
         metavar="N",
         help="render threads in all, shared by the --workers (1..4 per CPU of the machine; "
-        "default: the CPUs this process may use, its affinity and cgroup CPU quota); on a "
-        "machine others load, fewer threads than CPUs can finish sooner (docs/benchmarks.md)",
+        "default: the CPUs this process may use, its affinity and cgroup CPU quota); fewer "
+        "leave CPUs to other work, the same bytes (docs/benchmarks.md)",
     )
     parser.add_argument(
         "--executor",
