@@ -199,7 +199,7 @@ RENDER_FLAGS = [
     # jobs too large to start without --yes, or beyond Mitsuba's limits
     ["--res", "8192x8192", "--spp", "64"],
     ["--res", "1280x720", "--spp", "65536"],
-    ["--scenes", "100", "--res", "1280x720", "--spp", "4000", "--vis", "300..4000"],
+    ["--scenes", "16", "--res", "1280x720", "--spp", "4000", "--vis", "300..4000"],
     ["--scenes", "10000", "--res", "640x360"],
     ["--unknown-flag"],
 ]
@@ -240,7 +240,7 @@ def test_a_layout_that_fails_only_under_another_seed_is_located_in_its_file(tmp_
 
 
 def test_long_jobs_give_their_estimate_and_need_yes(tmp_path, no_render):
-    args = ["--scenes", "100", "--res", "1280x720", "--spp", "4000", "--vis", "300..4000"]
+    args = ["--scenes", "16", "--res", "1280x720", "--spp", "4000", "--vis", "300..4000"]
     code, _, err = run(["render", str(TINY), "--out", str(tmp_path / "o"), *args])
     assert_refused(code, err)
     assert "--yes" in err and "about" in err and " h " in err and "cost model" in err
