@@ -224,8 +224,11 @@ def _table(rows: list[dict], before: dict[float, dict]) -> list[str]:
     if before:
         head += " before: rendered | ratio |"
         rule += "---|---|"
-    head += f" rendered | ratio | at {low:g}× | at {high:g}× | sea pixels > 2.5× median |"
-    rule += "---|---|---|---|---|"
+    head += (
+        f" rendered | ratio | seeds' range | at {low:g}× | at {high:g}× |"
+        " sea pixels > 2.5× median |"
+    )
+    rule += "---|---|---|---|---|---|"
     lines = [head, rule]
     for row in rows:
         law = row["law"]
@@ -237,6 +240,7 @@ def _table(rows: list[dict], before: dict[float, dict]) -> list[str]:
             line += " | |"
         line += (
             f" {100 * row[key]:.2f} % | {row[key] / law:.2f} |"
+            f" {row['spread'][0] / law:.2f}–{row['spread'][1] / law:.2f} |"
             f" {100 * row[f'coverage_{low:g}']:.2f} % | {100 * row[f'coverage_{high:g}']:.2f} % |"
             f" {100 * row['global']:.2f} % |"
         )
@@ -270,11 +274,12 @@ def main() -> int:
     parser.add_argument("--before", type=Path, help="a saved run, shown as the before columns")
     parser.add_argument("--images", type=Path, help="write every view's clean PNG here")
     parser.add_argument("--no-doc", action="store_true", help="do not write docs/benchmarks.md")
+    parser.add_argument("--load", type=Path, help="write the doc from a saved run, no render")
     args = parser.parse_args()
     res = tuple(int(x) for x in args.res.lower().split("x"))
     assert len(res) == 2
-    rows = []
-    for wind in (float(w) for w in args.winds.split(",")):
+    rows = json.loads(args.load.read_text()) if args.load else []
+    for wind in [] if args.load else (float(w) for w in args.winds.split(",")):
         row = measure_wind(wind, res, args.spp, args.images)
         print(
             f"U = {wind:g} m/s: law {100 * row['law']:.2f} %, rendered "
