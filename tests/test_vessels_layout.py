@@ -12,6 +12,7 @@ from seahaze.vessels import (
     LayoutError,
     Placement,
     build_vessel,
+    min_air_draft_m,
     place_explicit,
     place_on_sea,
     sample_layout,
@@ -414,3 +415,34 @@ def test_a_layout_the_overlap_rule_cannot_meet_says_so() -> None:
             bearing_spread_deg=5.0,
             max_image_overlap=0.0,
         )
+
+
+# --------------------------------------------------------------------------- detectable share
+@pytest.mark.parametrize("kind", CLASS_NAMES)
+def test_every_built_vessel_stands_at_least_its_class_floor(kind: str) -> None:
+    # Seeds past the 30 the floor was read from: the floor holds for vessels it never saw.
+    lo, hi = VESSEL_CLASSES[kind].length_range_m
+    for seed in range(100, 112):
+        for length in (lo, 0.5 * (lo + hi), hi):
+            model = build_vessel(kind, length, np.random.default_rng(seed))
+            assert model.air_draft_m >= min_air_draft_m(kind, model.length_m) - 1e-9
+
+
+def test_the_detectable_share_stands_near_enough_to_look_tall_enough() -> None:
+    mrad = 14.4
+
+    def near(kind: str, length: float) -> float:
+        return 1000.0 * min_air_draft_m(kind, length) / mrad
+
+    for seed in range(20):
+        placements = _sample(
+            seed, count=6, distance_range_m=(150.0, 4000.0), near_enough=near, n_near=3
+        )
+        for p in placements[:3]:
+            # Built as the world builds it: its real height, not the floor, subtends at least so.
+            assert 1000.0 * min_air_draft_m(p.kind, p.length_m) / p.distance_m >= mrad - 1e-9
+    without = [p for seed in range(20) for p in _sample(seed, distance_range_m=(150.0, 4000.0))]
+    small = [
+        p for p in without if 1000.0 * min_air_draft_m(p.kind, p.length_m) / p.distance_m < mrad
+    ]
+    assert small  # without the rule many vessels look smaller than that

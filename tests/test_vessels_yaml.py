@@ -264,3 +264,12 @@ def test_a_sampler_without_the_overlap_rule_records_no_such_field() -> None:
     assert "max_image_overlap" not in spec.model_dump(mode="json")["vessels"]["sample"]
     kept = parse_scene_text("vessels:\n  sample: {count: 3, max_image_overlap: 0.2}\n", "o.yaml")
     assert kept.model_dump(mode="json")["vessels"]["sample"]["max_image_overlap"] == 0.2
+
+
+def test_a_detectable_share_outside_zero_to_one_names_the_field() -> None:
+    text = "vessels:\n  sample:\n    count: 3\n    detectable: {share: 2}\n"
+    with pytest.raises(SceneFileError) as info:
+        parse_scene_text(text, "d.yaml")
+    message = str(info.value)
+    assert message.startswith("d.yaml:4: vessels.sample.detectable.share"), message
+    assert "less than or equal to 1" in message and "\n" not in message

@@ -434,6 +434,29 @@ class PlacedVessel(_Spec):
         return self
 
 
+class DetectableSpec(_Spec):
+    """A share of the sampled vessels placed near enough to look at least so tall."""
+
+    min_height_mrad: float = Field(
+        14.4,
+        gt=0.0,
+        le=500.0,
+        description="Least angular height above the waterline (the top of the label's box): "
+        "14.4 mrad is 16 px at 1280×720 and a 60° field of view (the focal length in pixels "
+        "is width / (2 tan(fov/2)), so 8 px at 640×360). An angle, so a layout is the same "
+        "at every `--res`. Each class's least height per length "
+        "(`seahaze.vessels.library.MIN_AIR_DRAFT_RATIO`) caps such a vessel's distance.",
+        json_schema_extra=_unit("mrad"),
+    )
+    share: float = Field(
+        0.5,
+        ge=0.0,
+        le=1.0,
+        description="Share of `count` (rounded up) placed so; the rest anywhere in `distance_m`.",
+        json_schema_extra=_unit("1"),
+    )
+
+
 class VesselSampler(_Spec):
     """Vessels drawn at random along the view depth, each at a speed drawn in its class's
     service-speed range (buoys moored)."""
@@ -479,16 +502,22 @@ class VesselSampler(_Spec):
         "Default: no such rule (vessels apart on the water may still hide each other).",
         json_schema_extra=_unit("1"),
     )
+    detectable: DetectableSpec | None = Field(
+        None,
+        description="Place a share of the vessels near enough to look at least so tall "
+        "(default: distances drawn over the whole range, however small a vessel looks).",
+    )
     seed: int | None = Field(
         None, ge=0, description="Seed of the layout; default derived from `render.seed`."
     )
 
     @model_serializer(mode="wrap")
-    def _omit_unset_overlap(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
-        # Without the rule a recorded config stays byte-identical to before it existed.
+    def _omit_unset_rules(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # Without these rules a recorded config stays byte-identical to before they existed.
         data = handler(self)
-        if self.max_image_overlap is None:
-            data.pop("max_image_overlap", None)
+        for key in ("max_image_overlap", "detectable"):
+            if getattr(self, key) is None:
+                data.pop(key, None)
         return data
 
     @model_validator(mode="after")

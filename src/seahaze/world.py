@@ -20,13 +20,14 @@ import math
 from collections.abc import Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
 from . import motion, ocean, vessels
 from .camera import Camera
 from .seeds import Stream, stream_rng, stream_seed
-from .spec import SceneSpec
+from .spec import SceneSpec, VesselSampler
 
 SPEED_SUBSTREAM = 1
 """Sub-stream of a layout seed that draws the vessels' speeds: ``SeedSequence([layout seed,
@@ -338,8 +339,26 @@ def layout_vessels(
             horizontal_fov_deg=camera.fov_deg,
             existing=placements,
             max_image_overlap=sampler.max_image_overlap,
+            **_near_enough(sampler),
         )
     return placements
+
+
+def _near_enough(sampler: VesselSampler) -> dict[str, Any]:
+    """The layout's distance cap for the sampler's ``detectable`` share: a vessel of least
+    height ``h`` (m above the waterline) subtends ``h / d`` rad at distance ``d`` (level view,
+    small angles), so it looks at least ``min_height_mrad`` tall out to
+    ``d = 1000 h / min_height_mrad``. None: no cap."""
+    rule = sampler.detectable
+    if rule is None:
+        return {}
+    count = math.ceil(rule.share * sampler.count)
+    return {
+        "near_enough": lambda kind, length: (
+            1000.0 * vessels.min_air_draft_m(kind, length) / rule.min_height_mrad
+        ),
+        "n_near": count,
+    }
 
 
 def frame_layout(

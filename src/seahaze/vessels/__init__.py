@@ -30,6 +30,7 @@ from seahaze.vessels.library import (
     clear_model_cache,
     get_class,
     length_problem,
+    min_air_draft_m,
     sample_speed_m_s,
     speed_problem,
 )
@@ -69,6 +70,7 @@ __all__ = [
     "length_problem",
     "load_user_mesh",
     "mesh_search_dirs",
+    "min_air_draft_m",
     "place_explicit",
     "place_on_sea",
     "resolve_mesh_path",

@@ -352,6 +352,8 @@ def sample_layout(
     max_attempts_per_vessel: int = 200,
     existing: Sequence[Placement] = (),
     max_image_overlap: float | None = None,
+    near_enough: Callable[[str, float], float] | None = None,
+    n_near: int = 0,
 ) -> list[Placement]:
     """Sample ``count`` non-overlapping vessels around the camera (rejection sampling).
 
@@ -364,6 +366,11 @@ def sample_layout(
     same scene), or, with ``max_image_overlap``, hides more than that fraction of one of them
     in the image (module docstring); after ``max_attempts_per_vessel`` rejections a
     :class:`LayoutError` says how many vessels fitted. Same ``rng`` state → same layout.
+
+    ``near_enough(kind, length)`` (m), for the first ``n_near`` vessels: the farthest distance
+    at which that vessel still looks as large as asked (the sampler's ``detectable``); their
+    distance is drawn from ``distribution`` over the range cut there, and a class and length
+    whose cut falls short of the range's near end is drawn again.
     """
     if count < 0:
         raise ValueError(f"count must be >= 0, got {count}")
@@ -387,7 +394,12 @@ def sample_layout(
             for _attempt in range(max_attempts_per_vessel):
                 kind = kinds[int(rng.choice(len(kinds), p=probs))]
                 length = _sample_length(kind, rng)
-                distance = sample_distance(distance_range_m, distribution, rng)
+                span = distance_range_m
+                if near_enough is not None and len(placements) < n_near:
+                    span = (span[0], min(span[1], near_enough(kind, length)))
+                    if span[1] < span[0]:
+                        continue  # too small to look large enough anywhere in the range
+                distance = sample_distance(span, distribution, rng)
                 half = _bearing_half_range(bearing_spread_deg, horizontal_fov_deg, length, distance)
                 bearing = float(rng.uniform(-half, half))
                 heading = float(rng.uniform(0.0, 360.0))

@@ -339,6 +339,31 @@ def class_id(kind: str) -> int:
     return get_class(kind).class_id
 
 
+MIN_AIR_DRAFT_RATIO: dict[str, float] = {
+    "container_ship": 0.12,
+    "bulk_carrier": 0.10,
+    "tanker": 0.10,
+    "passenger_ferry": 0.16,
+    "fishing_boat": 0.32,
+    "tug": 0.30,
+    "sailboat": 1.25,
+    "speedboat": 0.10,
+    "buoy": 1.25,
+}
+"""Least height above the waterline (the top of mast, funnel or stack: the top of a label's
+box) per metre of length that each class's builder gives, over its whole length range. A
+floor read off the builders themselves (90 vessels a class: 30 seeds at the shortest, middle
+and longest length; tests/test_vessels_library.py checks it still holds), so a layout can
+place a vessel where it is sure to look at least so tall (:func:`min_air_draft_m`)."""
+
+
+def min_air_draft_m(kind: str, length_m: float) -> float:
+    """The least height (m) above the waterline a ``kind`` vessel ``length_m`` long is built
+    with (:data:`MIN_AIR_DRAFT_RATIO`)."""
+    get_class(kind)  # ValueError listing the allowed kinds
+    return MIN_AIR_DRAFT_RATIO[kind] * length_m
+
+
 def get_class(kind: str) -> VesselClass:
     """The :class:`VesselClass` of ``kind`` (ValueError listing the allowed kinds if unknown)."""
     try:
