@@ -250,26 +250,24 @@ def test_follow_slope_pitches_and_rolls_the_hull_to_the_sea() -> None:
     assert side[2] == pytest.approx(np.cos(pitch) * np.sin(roll), abs=1e-5)  # port up by roll
 
 
-def test_image_overlap_outside_zero_to_one_names_the_field_and_range() -> None:
-    text = "vessels:\n  sample:\n    count: 3\n    max_image_overlap: 1.5\n"
+@pytest.mark.parametrize(
+    ("rule", "field"),
+    [
+        ("max_image_overlap: 1.5", "vessels.sample.max_image_overlap"),
+        ("detectable: {share: 2}", "vessels.sample.detectable.share"),
+    ],
+)
+def test_layout_rules_outside_zero_to_one_name_the_field_and_range(rule: str, field: str) -> None:
     with pytest.raises(SceneFileError) as info:
-        parse_scene_text(text, "o.yaml")
+        parse_scene_text(f"vessels:\n  sample:\n    count: 3\n    {rule}\n", "o.yaml")
     message = str(info.value)
-    assert message.startswith("o.yaml:4: vessels.sample.max_image_overlap"), message
+    assert message.startswith(f"o.yaml:4: {field}"), message
     assert "less than or equal to 1" in message and "\n" not in message
 
 
-def test_a_sampler_without_the_overlap_rule_records_no_such_field() -> None:
+def test_a_sampler_without_the_layout_rules_records_neither() -> None:
     spec = parse_scene_text("vessels:\n  sample:\n    count: 3\n", "o.yaml")
-    assert "max_image_overlap" not in spec.model_dump(mode="json")["vessels"]["sample"]
+    sample = spec.model_dump(mode="json")["vessels"]["sample"]
+    assert "max_image_overlap" not in sample and "detectable" not in sample
     kept = parse_scene_text("vessels:\n  sample: {count: 3, max_image_overlap: 0.2}\n", "o.yaml")
     assert kept.model_dump(mode="json")["vessels"]["sample"]["max_image_overlap"] == 0.2
-
-
-def test_a_detectable_share_outside_zero_to_one_names_the_field() -> None:
-    text = "vessels:\n  sample:\n    count: 3\n    detectable: {share: 2}\n"
-    with pytest.raises(SceneFileError) as info:
-        parse_scene_text(text, "d.yaml")
-    message = str(info.value)
-    assert message.startswith("d.yaml:4: vessels.sample.detectable.share"), message
-    assert "less than or equal to 1" in message and "\n" not in message
