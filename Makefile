@@ -2,7 +2,7 @@
 #   make render   render scenes/default.yaml clean + 11 visibility levels into out/default
 #   make test     run the test suite (two pytest-xdist workers: most of its time is LLVM compiling
 #                 kernels on one thread, so a second worker overlaps it; 821 s for 2322 tests
-#                 from a fresh clone with an empty kernel cache on an idle 2-vCPU machine)
+#                 from a fresh clone with an empty kernel cache on a 2-vCPU machine)
 VENV  := .venv
 STAMP := $(VENV)/.seahaze-installed
 OUT   ?= out/default
