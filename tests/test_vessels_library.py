@@ -7,6 +7,7 @@ import pytest
 
 from seahaze.vessels import CLASS_NAMES, VESSEL_CLASSES, build_vessel, class_id
 from seahaze.vessels.model import VesselModel
+from seahaze.world import wind_off_bow
 
 SHIP_KINDS = [k for k in CLASS_NAMES if k != "buoy"]
 SEEDS = (0, 1, 2, 3)
@@ -196,3 +197,47 @@ def test_unknown_kind_lists_allowed_kinds() -> None:
 def test_out_of_range_length_states_the_range() -> None:
     with pytest.raises(ValueError, match=r"\[5, 15\] m"):
         build_vessel("speedboat", 40.0, np.random.default_rng(0))
+
+
+def _boom_angle_deg(model) -> float:
+    """The boom's angle off the centreline (deg, positive to port) from its mesh: the line
+    from its forward end (at the mast) to its far end."""
+    v = np.asarray(model.part("boom").mesh.vertices)
+    fwd = v[np.argmax(v[:, 0])]
+    aft = v[np.argmax(np.hypot(v[:, 0] - fwd[0], v[:, 1] - fwd[1]))]
+    return float(np.degrees(np.arctan2(aft[1] - fwd[1], fwd[0] - aft[0])))
+
+
+@pytest.mark.parametrize(
+    ("wind_from_deg", "boom_deg"),
+    [(90.0, -45.0), (-120.0, 60.0), (60.0, -30.0), (180.0, -85.0), (-179.0, 85.0)],
+)
+def test_a_sailboat_trims_its_boom_to_leeward_by_half_the_winds_angle(wind_from_deg, boom_deg):
+    model = build_vessel("sailboat", 12.0, np.random.default_rng(5), wind_from_deg)
+    assert "sail_main" in model.part_names and "sail_cover" not in model.part_names
+    # The boom's own radius tilts the measured line a little: within 3°.
+    assert _boom_angle_deg(model) == pytest.approx(boom_deg, abs=3.0)
+    jib = np.asarray(model.part("sail_jib").mesh.vertices)
+    assert np.sign(jib[:, 1].sum()) == np.sign(boom_deg)  # the jib to leeward too
+
+
+def test_a_sailboat_heading_into_the_wind_furls_its_sails() -> None:
+    for wind in (0.0, 25.0, -35.0):
+        model = build_vessel("sailboat", 12.0, np.random.default_rng(5), wind)
+        assert "sail_cover" in model.part_names and "sail_main" not in model.part_names
+
+
+@pytest.mark.parametrize(
+    ("toward", "heading", "expected"),
+    [
+        (0.0, 0.0, 180.0),
+        (0.0, 180.0, 0.0),
+        (0.0, 90.0, 90.0),
+        (0.0, -90.0, -90.0),
+        (30.0, 300.0, -90.0),
+    ],
+)
+def test_the_wind_off_the_bow(toward: float, heading: float, expected: float) -> None:
+    # A wind toward +x comes from azimuth 180: dead astern of a bow to +x, ahead of one to -x,
+    # on the port beam of a bow to +y (counter-clockwise, port, is positive).
+    assert wind_off_bow(toward, heading) == pytest.approx(expected)

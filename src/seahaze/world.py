@@ -344,6 +344,15 @@ def layout_vessels(
     return placements
 
 
+def wind_off_bow(wind_toward_deg: float, heading_deg: float) -> float:
+    """Where the wind comes from, degrees off a bow pointing to azimuth ``heading_deg``
+    (positive to port, in (−180, 180]), for a wind blowing toward ``wind_toward_deg`` (the
+    sea's ``direction_deg``: a wind sea runs with its wind). Azimuths counter-clockwise
+    from +x."""
+    off = (wind_toward_deg + 180.0 - heading_deg) % 360.0
+    return off - 360.0 if off > 180.0 else off
+
+
 def _near_enough(sampler: VesselSampler) -> dict[str, Any]:
     """The layout's distance cap for the sampler's ``detectable`` share: a vessel of least
     height ``h`` (m above the waterline) subtends ``h / d`` rad at distance ``d`` (level view,
@@ -445,7 +454,13 @@ def build_vessels(
         # Explicit vessels come first in the layout, so index i < len(placed) is placed[i].
         model = user_models.get(index)
         if model is None:
-            model = vessels.build_vessel_reused(placement.kind, placement.length_m, rng)
+            # A sailboat trims its sails to the wind; nothing else depends on it.
+            wind = (
+                wind_off_bow(spec.sea.direction_deg, placement.heading_deg)
+                if placement.kind == "sailboat"
+                else None
+            )
+            model = vessels.build_vessel_reused(placement.kind, placement.length_m, rng, wind)
         parts = vessels.place_on_sea(
             model, placement, surface.height, follow_slope=spec.vessels.follow_slope
         )

@@ -106,7 +106,7 @@ from __future__ import annotations
 
 from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -424,15 +424,21 @@ def sample_speed_m_s(kind: str, rng: np.random.Generator) -> float:
     return float(rng.uniform(lo, hi))
 
 
-def build_vessel(kind: str, length_m: float | None, rng: np.random.Generator) -> VesselModel:
+def build_vessel(
+    kind: str,
+    length_m: float | None,
+    rng: np.random.Generator,
+    wind_from_deg: float | None = None,
+) -> VesselModel:
     """Build a procedural vessel of class ``kind`` in the vessel frame (metres).
 
     ``length_m`` None samples the length uniformly inside the class range; all other
     proportions, layout choices and colours come from ``rng`` (same seed → same vessel).
-    Raises ValueError for an unknown kind (listing the allowed kinds) or a length outside
-    the class range (stating the range).
+    ``wind_from_deg``: where the wind comes from, degrees off the bow (positive to port); a
+    sailboat trims its sails to it (None: at random). Raises ValueError for an unknown kind
+    (listing the allowed kinds) or a length outside the class range (stating the range).
     """
-    dims = sample_dimensions(kind, length_m, rng)
+    dims = replace(sample_dimensions(kind, length_m, rng), wind_from_deg=wind_from_deg)
     parts = get_class(kind).builder(dims, rng)
     model = VesselModel(kind, dims.length, dims.beam, dims.draft, 0.0, parts, dims.draft)
     lo, hi = model.bounds()
@@ -445,26 +451,34 @@ def build_vessel(kind: str, length_m: float | None, rng: np.random.Generator) ->
 MODEL_CACHE_SIZE = 64
 """Most procedural vessel models :func:`build_vessel_reused` keeps (least recently used
 dropped first): a few sequences' fleets at about 0.2 MB of vertices and faces each."""
-_MODEL_CACHE: OrderedDict[tuple[str, float | None, str], tuple[VesselModel, dict]] = OrderedDict()
+_MODEL_CACHE: OrderedDict[tuple[str, float | None, float | None, str], tuple[VesselModel, dict]] = (
+    OrderedDict()
+)
 
 
-def build_vessel_reused(kind: str, length_m: float | None, rng: np.random.Generator) -> VesselModel:
+def build_vessel_reused(
+    kind: str,
+    length_m: float | None,
+    rng: np.random.Generator,
+    wind_from_deg: float | None = None,
+) -> VesselModel:
     """:func:`build_vessel`, reusing the model built before from the same inputs.
 
-    A model depends on the class, the length and the generator's state and nothing else (the
-    library code is fixed within a process), so those are the key; a hit also moves ``rng`` on
-    to the state the build left it in, so the vessels built after it draw what they would have.
-    The frames of a sequence build the same fleet (same seed, kinds and lengths), so every
-    frame after the first reuses its models. The model is shared: callers must not change it
+    A model depends on the class, the length, the wind and the generator's state and nothing
+    else (the library code is fixed within a process), so those are the key; a hit also moves
+    ``rng`` on to the state the build left it in, so the vessels built after it draw what they
+    would have. The frames of a sequence build the same fleet (same seed, kinds and lengths),
+    so every frame after the first reuses its models (a sailboat's only while its heading, and
+    so its trim, holds). The model is shared: callers must not change it
     (:func:`seahaze.vessels.place_on_sea` copies the vertices it moves).
     """
-    key = (kind, length_m, repr(rng.bit_generator.state))
+    key = (kind, length_m, wind_from_deg, repr(rng.bit_generator.state))
     hit = _MODEL_CACHE.get(key)
     if hit is not None:
         _MODEL_CACHE.move_to_end(key)
         rng.bit_generator.state = hit[1]
         return hit[0]
-    model = build_vessel(kind, length_m, rng)
+    model = build_vessel(kind, length_m, rng, wind_from_deg)
     _MODEL_CACHE[key] = (model, rng.bit_generator.state)
     while len(_MODEL_CACHE) > MODEL_CACHE_SIZE:
         _MODEL_CACHE.popitem(last=False)

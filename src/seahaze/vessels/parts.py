@@ -39,6 +39,9 @@ class PrincipalDims:
     beam: float
     depth: float
     draft: float
+    wind_from_deg: float | None = None
+    """Where the wind comes from, degrees off the bow (positive to port, −180..180); None:
+    unknown (a sailboat then sets its sails at random)."""
 
     @property
     def freeboard(self) -> float:

@@ -323,13 +323,17 @@ def build_sailboat(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPar
     parts.add_mast(x_mast, 0.0, deck_m, mast_h, mast_r, spar, yard_half_width=0.12 * beam)
     boom_z = deck_m + min(1.2, 0.1 * length) + ch * 0.5
     boom_len = min(u(rng, 0.33, 0.42) * length, x_mast + 0.45 * length)
+    # Without a wind the sails are set at random (the draws as they always were).
     side = 1.0 if rng.random() < 0.5 else -1.0
     max_angle = np.degrees(np.arcsin(min(1.0, 0.4 * beam / boom_len)))
     angle = np.radians(u(rng, 0.0, min(25.0, max_angle))) * side
+    sails_set = rng.random() < 0.75
+    if d.wind_from_deg is not None:
+        side, angle, sails_set = _trim(d.wind_from_deg)
     clew = (x_mast - boom_len * np.cos(angle), boom_len * np.sin(angle), boom_z)
     tack = (x_mast - mast_r, 0.0, boom_z)
     parts.add("boom", cylinder_between(tack, clew, 0.7 * mast_r), spar)
-    if rng.random() < 0.75:
+    if sails_set:
         cloth = pick_material(SAIL_CLOTH, rng)
         head = (x_mast - mast_r, 0.0, deck_m + 0.97 * mast_h)
         parts.add("sail_main", thin_triangle(tack, head, clew, 0.03), cloth)
@@ -339,16 +343,38 @@ def build_sailboat(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPar
             _deck_at(form, form.half_length - 0.03 * length) + 0.3,
         )
         jib_head = (x_mast + mast_r, 0.0, deck_m + u(rng, 0.75, 0.9) * mast_h)
-        jib_clew = (
-            x_mast - u(rng, 0.0, 0.1) * length,
-            side * u(rng, 0.15, 0.4) * beam,
-            deck_m + 0.6,
-        )
+        jib_x = x_mast - u(rng, 0.0, 0.1) * length
+        if d.wind_from_deg is None:
+            jib_reach = u(rng, 0.15, 0.4) * beam
+        else:  # sheeted like the main, its foot swung to leeward, at most to the rail's lead
+            swung = (jib_tack[0] - jib_x) * abs(np.sin(angle))
+            jib_reach = float(np.clip(swung, 0.15 * beam, 0.6 * beam))
+        jib_clew = (jib_x, side * jib_reach, deck_m + 0.6)
         parts.add("sail_jib", thin_triangle(jib_tack, jib_head, jib_clew, 0.03), cloth)
     else:
         cover = pick_material(FUNNEL_PAINTS[1:2] + SAIL_CLOTH[2:], rng)
         parts.add("sail_cover", cylinder_between(tack, clew, 2.5 * mast_r), cover)
     return parts.to_parts()
+
+
+NO_GO_DEG = 40.0
+"""A sloop cannot sail closer to the wind than about this many degrees off the bow (the "no-go
+zone"): pointing closer, it motors with its sails furled."""
+
+
+def _trim(wind_from_deg: float) -> tuple[float, float, bool]:
+    """How a sloop with the wind ``wind_from_deg`` off its bow (positive: from port) sets its
+    mainsail: the side its boom swings to (+1 port, −1 starboard: always to leeward), the
+    boom's angle off the centreline (rad, signed like the side) and whether the sails are set
+    at all (not inside :data:`NO_GO_DEG`). The boom goes out to about half the wind's angle off
+    the bow, the usual trim from close-hauled (about 20°) through a beam reach (45°) to a run
+    (85°, the most a boom swings before the shrouds); the true wind stands in for the apparent
+    wind, which a moving boat sees further forward."""
+    off_bow = abs(wind_from_deg)
+    side = -1.0 if wind_from_deg > 0.0 else 1.0
+    if off_bow < NO_GO_DEG:
+        return side, side * np.radians(5.0), False
+    return side, side * np.radians(min(0.5 * off_bow, 85.0)), True
 
 
 def build_speedboat(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
