@@ -414,9 +414,9 @@ def test_frames_reuse_their_vessel_models_and_build_the_same_bytes(which, monkey
     built = []
     build = library.build_vessel
 
-    def counting(kind, length_m, rng):
+    def counting(kind, length_m, rng, wind_from_deg=None):
         built.append(kind)
-        return build(kind, length_m, rng)
+        return build(kind, length_m, rng, wind_from_deg)
 
     monkeypatch.setattr(library, "build_vessel", counting)
 
