@@ -101,6 +101,21 @@ def legend_tile(width: int, height: int) -> Any:
     return image
 
 
+def save_sheet(tiles: list[Any], columns: int, out: Path) -> None:
+    """Paste the labelled ``tiles`` (PIL images of one size) row by row, ``columns`` a row, on
+    a white sheet and save it as the PNG ``out``."""
+    from PIL import Image
+
+    tile_w, tile_h = tiles[0].size
+    rows = -(-len(tiles) // columns)
+    sheet = Image.new("RGB", (columns * tile_w, rows * tile_h), "white")
+    for i, tile in enumerate(tiles):
+        sheet.paste(tile, ((i % columns) * tile_w, (i // columns) * tile_h))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    sheet.save(out, optimize=True)
+    print(f"wrote {out} ({sheet.size[0]}×{sheet.size[1]})")
+
+
 def vessel_lines(name: str, scene: Any) -> list[str]:
     """Per level, each vessel's mean transmittance over its pixels and the effective
     visibility of the centre pixel's ray (``meta``)."""
@@ -125,7 +140,6 @@ def main() -> None:
     parser.add_argument("--spp", type=int, default=32)
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()
-    from PIL import Image
 
     from seahaze import imaging
 
@@ -152,14 +166,7 @@ def main() -> None:
         last = scene.levels[-1]
         grey = v_eff_grey(last.transmission.visibility_eff_m, last.visibility_m)
         tiles.append(labelled(grey, f"{name}: V_eff at {last.visibility_m:g} m"))
-    columns = 3
-    tile_w, tile_h = tiles[0].size
-    sheet = Image.new("RGB", (columns * tile_w, (len(tiles) // columns) * tile_h), "white")
-    for i, tile in enumerate(tiles):
-        sheet.paste(tile, ((i % columns) * tile_w, (i // columns) * tile_h))
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    sheet.save(args.out, optimize=True)
-    print(f"wrote {args.out} ({sheet.size[0]}×{sheet.size[1]})")
+    save_sheet(tiles, 3, args.out)
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from make_nonuniform_gallery import labelled
+from make_nonuniform_gallery import labelled, save_sheet
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "docs" / "images" / "sky_gallery.png"
@@ -38,8 +38,6 @@ def main() -> None:
     parser.add_argument("--spp", type=int, default=16)
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()
-    from PIL import Image
-
     from seahaze import imaging
     from seahaze.render.engine import render_scene
     from seahaze.sceneio import load_scene
@@ -57,14 +55,7 @@ def main() -> None:
         for level in scene.levels:
             image = imaging.to_srgb8(level.radiance, scene.exposure)
             tiles.append(labelled(image, f"{name}: {level.visibility_m:g} m"))
-    columns = 1 + len(LEVELS_M)
-    tile_w, tile_h = tiles[0].size
-    sheet = Image.new("RGB", (columns * tile_w, (len(tiles) // columns) * tile_h), "white")
-    for i, tile in enumerate(tiles):
-        sheet.paste(tile, ((i % columns) * tile_w, (i // columns) * tile_h))
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    sheet.save(args.out, optimize=True)
-    print(f"wrote {args.out} ({sheet.size[0]}×{sheet.size[1]})")
+    save_sheet(tiles, 1 + len(LEVELS_M), args.out)
 
 
 if __name__ == "__main__":
