@@ -31,14 +31,33 @@ ENVMAP_ROWS = 512
 def sunsky_dict(spec: SceneSpec, sun: bool = True, sky: bool = True) -> dict:
     """The Hosek–Wilkie ``sunsky`` emitter of ``spec``'s sun and turbidity; ``sun``/``sky``
     False switch a part off."""
-    direction = sun_direction(spec.sun.elevation_deg, spec.sun.azimuth_deg)
+    return _sunsky(
+        spec.sun.elevation_deg,
+        spec.sun.azimuth_deg,
+        spec.sky.turbidity,
+        spec.sky.ground_albedo,
+        spec.sun.scale if sun else 0.0,
+        spec.sky.scale if sky else 0.0,
+    )
+
+
+def _sunsky(
+    elevation_deg: float,
+    azimuth_deg: float,
+    turbidity: float,
+    ground_albedo: float,
+    sun_scale: float,
+    sky_scale: float,
+) -> dict:
+    """Mitsuba's ``sunsky`` plugin dict for this sun, turbidity and ground albedo, its sun and
+    sky parts scaled by ``sun_scale`` and ``sky_scale``."""
     return {
         "type": "sunsky",
-        "sun_direction": direction.tolist(),
-        "turbidity": spec.sky.turbidity,
-        "albedo": spec.sky.ground_albedo,
-        "sun_scale": spec.sun.scale if sun else 0.0,
-        "sky_scale": spec.sky.scale if sky else 0.0,
+        "sun_direction": sun_direction(elevation_deg, azimuth_deg).tolist(),
+        "turbidity": turbidity,
+        "albedo": ground_albedo,
+        "sun_scale": sun_scale,
+        "sky_scale": sky_scale,
     }
 
 
@@ -85,21 +104,13 @@ def clear_global_irradiance(
     import drjit as dr
     import mitsuba as mi
 
-    direction = sun_direction(elevation_deg, azimuth_deg)
     origin = dr.zeros(mi.Interaction3f)
     rng = mi.PCG32(IRRADIANCE_SAMPLES)
     sample = mi.Point2f(rng.next_float32(), rng.next_float32())
     total = np.zeros(3)
     for sun, sky in ((1.0, 0.0), (0.0, 1.0)):
         emitter = mi.load_dict(
-            {
-                "type": "sunsky",
-                "sun_direction": direction.tolist(),
-                "turbidity": turbidity,
-                "albedo": ground_albedo,
-                "sun_scale": sun,
-                "sky_scale": sky,
-            }
+            _sunsky(elevation_deg, azimuth_deg, turbidity, ground_albedo, sun, sky)
         )
         ds, weight = emitter.sample_direction(origin, sample)
         per_sample = np.array(weight * dr.maximum(ds.d.z, 0.0), np.float64)
