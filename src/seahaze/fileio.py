@@ -67,13 +67,7 @@ def _use_exr_threads(openexr: Any) -> None:
     """Let OpenEXR compress a file's blocks on every CPU of the process (its default is none:
     ZIP took 0.23 s for a 1280×720 RGB file on one thread, 0.12 s on two). The bytes do not
     change: each block is compressed alone."""
-    openexr.set_global_thread_count(cores())
-
-
-def cores() -> int:
-    """CPUs this process may use: its affinity and its cgroup CPU quota, the smaller, at
-    least 1 (:func:`seahaze.cpus.usable_cpus`)."""
-    return usable_cpus()
+    openexr.set_global_thread_count(usable_cpus())
 
 
 def _exr_write_error(path: Path, err: RuntimeError) -> OSError:

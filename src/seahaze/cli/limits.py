@@ -46,7 +46,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .. import __version__
-from ..fileio import cores, write_json
+from ..cpus import usable_cpus
+from ..fileio import write_json
 from ..spec import SceneSpec
 
 MAX_SCENES = 10_000
@@ -140,7 +141,7 @@ class Estimate:
         )
         return (
             f"{self.scenes} scene(s), about {format_duration(self.seconds)}{compiling} on "
-            f"{cores()} core(s) and {self.peak_bytes / 2**30:.1f} GiB "
+            f"{usable_cpus()} core(s) and {self.peak_bytes / 2**30:.1f} GiB "
             "(cost model: docs/limits.md)"
         )
 
@@ -157,7 +158,7 @@ class Estimate:
 
 def max_workers() -> int:
     """Most local workers on this machine: 4 per core, at most :data:`MAX_WORKERS`."""
-    return min(MAX_WORKERS, 4 * cores())
+    return min(MAX_WORKERS, 4 * usable_cpus())
 
 
 def total_memory() -> int:
@@ -337,7 +338,7 @@ def check_hard_limits(
     if workers is not None and not 1 <= workers <= max_workers():
         raise LimitError(
             f"--workers {workers}: must be within 1..{max_workers()} (this machine has "
-            f"{cores()} core(s); each worker renders with cores/workers threads)"
+            f"{usable_cpus()} core(s); each worker renders with cores/workers threads)"
         )
     for name, spec in templates:
         width, height = spec.camera.resolution
@@ -371,7 +372,7 @@ def estimate(
         serial, parallel = serial + count * s, parallel + count * p
     scenes = sum(count for _, count in jobs)
     compiling = kernels.compile_seconds(spec for spec, count in jobs if count)
-    seconds = (STARTUP_S if scenes else 0.0) + compiling + serial + parallel / max(cores(), 1)
+    seconds = (STARTUP_S if scenes else 0.0) + compiling + serial + parallel / usable_cpus()
     peak = max((scene_bytes(spec) for spec, _ in jobs), default=0)
     together = peak * max(min(at_once, scenes), 1)
     return Estimate(seconds, peak, scenes, compiling, together)

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from ..cpus import usable_cpus
 from ..dataset.splits import DEFAULT_SPLIT_SOURCE
 from ..spec import RENDER_MODES
 from . import limits
@@ -59,7 +60,7 @@ def _check_batch_args(args: argparse.Namespace) -> None:
     if args.workers is not None and not 1 <= args.workers <= most:
         raise UsageError(
             f"--workers {args.workers}: must be within 1..{most} (this machine has "
-            f"{limits.cores()} core(s); each worker renders with cores/workers threads)"
+            f"{usable_cpus()} core(s); each worker renders with cores/workers threads)"
         )
     if args.variant is not None and args.variant not in ("auto", *SUPPORTED_VARIANTS):
         raise UsageError(

@@ -20,6 +20,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from .. import camera_model, fileio
+from ..cpus import usable_cpus
 from ..render.engine import RenderedLevel, SceneRender
 from ..visibility import CLEAN_LEVEL
 from .layout import Layout
@@ -35,7 +36,7 @@ def write_scene(layout: Layout, scene: SceneRender) -> None:
     name = scene.name
     images = [(CLEAN_LEVEL, scene.clean_image, scene.clean)]
     images += [(level.name, level.image, level.radiance) for level in scene.levels]
-    with ThreadPoolExecutor(max_workers=min(4, fileio.cores())) as pool:
+    with ThreadPoolExecutor(max_workers=min(4, usable_cpus())) as pool:
         writes = [pool.submit(_write_image, layout, *image, scene) for image in images]
     for write in writes:  # the pool has waited for every write
         write.result()
