@@ -17,7 +17,8 @@ Proportions follow common naval-architecture practice for these types:
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -304,8 +305,7 @@ def _add_container_stacks(
     x_end = -form.half_length + 0.05 * form.length
     gap = u(rng, 0.8, 1.4)
     row_pitch = CONTAINER_WIDTH_M + CONTAINER_GAP_M[0]
-    line = pick_material(CONTAINER_COLOURS, rng, jitter=0.0)
-    line_share = u(rng, *LINE_SHARE_RANGE)
+    livery = _Livery(pick_material(CONTAINER_COLOURS, rng, jitter=0.0), u(rng, *LINE_SHARE_RANGE))
     by_colour: dict[str, tuple[Material, list[Corner], list[Corner]]] = {}
     x1 = x_front
     while x1 - CONTAINER_LENGTH_M > x_end:
@@ -335,23 +335,10 @@ def _add_container_stacks(
             tiers = min(tiers, allowed)
             if tiers < 1:
                 continue
-            for row in range(max(1, int((y1 - y0 + CONTAINER_GAP_M[0]) // row_pitch))):
-                ya = y0 + row * row_pitch
-                row_tiers = tiers - int(rng.random() < 0.2)
-                for tier in range(row_tiers):
-                    za = z_base + tier * CONTAINER_HEIGHT_M
-                    # The bottom tier sits 0.5 m into the coaming: no sky under the stack.
-                    bottom = za - 0.5 if tier == 0 else za
-                    top = za + CONTAINER_HEIGHT_M - CONTAINER_GAP_M[1]
-                    for xa, xb in _slot_boxes(bay, rng):
-                        colour = (
-                            line
-                            if rng.random() < line_share
-                            else pick_material(CONTAINER_COLOURS, rng, jitter=0.0)
-                        )
-                        entry = by_colour.setdefault(colour.name, (colour, [], []))
-                        entry[1].append((xa, ya, bottom))
-                        entry[2].append((xb, ya + CONTAINER_WIDTH_M, top))
+            for colour, lower, upper in _stack(bay, (y0, y1), z_base, tiers, livery, rng):
+                entry = by_colour.setdefault(colour.name, (colour, [], []))
+                entry[1].append(lower)
+                entry[2].append(upper)
         # Hatch cover under the stacks (also visible where a stack is missing).
         z_deck = deck_range(form, *bay)[0]
         parts.add(
@@ -361,6 +348,47 @@ def _add_container_stacks(
         )
     for name, (colour, lower, upper) in sorted(by_colour.items()):
         parts.add(f"containers_{name.removeprefix('container_')}", boxes(lower, upper), colour)
+
+
+@dataclass(frozen=True)
+class _Livery:
+    """A ship's container colours: its operating line's ``own`` livery for a ``share`` of its
+    boxes, any of :data:`CONTAINER_COLOURS` for the rest."""
+
+    own: Material
+    share: float
+
+    def pick(self, rng: np.random.Generator) -> Material:
+        """One box's colour."""
+        if rng.random() < self.share:
+            return self.own
+        return pick_material(CONTAINER_COLOURS, rng, jitter=0.0)
+
+
+def _stack(
+    bay: tuple[float, float],
+    across: tuple[float, float],
+    z_base: float,
+    tiers: int,
+    livery: _Livery,
+    rng: np.random.Generator,
+) -> Iterator[tuple[Material, Corner, Corner]]:
+    """The boxes of one stack, ``bay`` along the ship and ``across`` it (m), from ``z_base`` up
+    ``tiers`` tiers: row by row (a row one tier short now and then), tier by tier, slot by slot
+    (:func:`_slot_boxes`), each with its colour and lower and upper corners."""
+    y0, y1 = across
+    row_pitch = CONTAINER_WIDTH_M + CONTAINER_GAP_M[0]
+    for row in range(max(1, int((y1 - y0 + CONTAINER_GAP_M[0]) // row_pitch))):
+        ya = y0 + row * row_pitch
+        row_tiers = tiers - int(rng.random() < 0.2)
+        for tier in range(row_tiers):
+            za = z_base + tier * CONTAINER_HEIGHT_M
+            # The bottom tier sits 0.5 m into the coaming: no sky under the stack.
+            bottom = za - 0.5 if tier == 0 else za
+            top = za + CONTAINER_HEIGHT_M - CONTAINER_GAP_M[1]
+            for xa, xb in _slot_boxes(bay, rng):
+                colour = livery.pick(rng)
+                yield colour, (xa, ya, bottom), (xb, ya + CONTAINER_WIDTH_M, top)
 
 
 def _slot_boxes(bay: tuple[float, float], rng: np.random.Generator) -> list[tuple[float, float]]:
