@@ -21,6 +21,7 @@ from ..haze import Extinction, asm_composite, optical_depth
 from ..medium import HazeMedium
 from ..seeds import RenderPass, render_seed
 from .scene import VESSEL_SHAPE, LoadedScene, stratified_spp
+from .wavefront import render_film
 
 GEOMETRY_MAX_CROSSINGS = 16
 """Surfaces a pixel ray walks through: the haze box (twice at most) and vessels behind vessels."""
@@ -160,17 +161,15 @@ def render_radiance(
     scene's integrator or ``integrator`` (the physical mode's); ``clean`` renders the scene
     without the haze box (:attr:`LoadedScene.clean_scene`); ``clip=False`` keeps negative
     values (a correction, not a radiance)."""
-    import mitsuba as mi
-
     scene = loaded.clean_scene if clean and loaded.clean_scene is not None else loaded.scene
     if not loaded.has_haze_box and sensor_index == 0:
         spp = stratified_spp(spp)  # the physical scene's multijitter sampler: no rounding up
-    image = mi.render(scene, sensor=sensor_index, spp=spp, seed=seed, integrator=integrator)
+    integrator = integrator if integrator is not None else scene.integrator()
+    image = render_film(scene, scene.sensors()[sensor_index], integrator, spp, seed)
     # Mitsuba 3.9's sunsky gives the sun a negative blue radiance below about 3 deg elevation
     # (RGB -58 for +3819 red: its reddened colour lies outside the sRGB gamut), so the sun, its
     # glint and sunlit pixels can come out negative in blue. Clipping at zero is the gamut clip
     # (light is never negative); NaN stays NaN for the tests to catch.
-    image = np.array(image, dtype=np.float32)
     return np.maximum(image, 0.0) if clip else image
 
 

@@ -1,0 +1,115 @@
+"""Mitsuba's render loop for seahaze's cameras, with the image size out of the kernel.
+
+Mitsuba's ``SamplingIntegrator::render`` (the loop behind ``mi.render``) and its
+``perspective`` sensor write the film's width and height, their reciprocals and the
+ray-differential scale into the kernel as constants, so every new image size compiles the
+camera pass again: the largest kernels seahaze has, seconds to tens of seconds of LLVM time
+each on a small machine (docs/benchmarks.md, "What does a new image size or sample count
+compile?"). :func:`render_film` is that loop for what seahaze renders (one pass of ``spp``
+samples per pixel, a pinhole camera, a box-filtered RGB film) with those numbers passed as
+opaque values. It draws the same samples in the same order as Mitsuba's loop, so its images
+equal ``mi.render``'s to the rounding of each pixel's sum (Mitsuba's film orders the additions
+by its own rules; ``tests/test_wavefront.py``), and every image size whose pixel count lies in
+the same octave shares one compiled kernel (the per-thread sums' length is the one size left
+in it). The sums are drjit's per-thread ones, as in Mitsuba's film: the same bytes for the
+same seed on the CPU; on a GPU they are atomic and their order varies in the last bits.
+
+The sample count still shapes the kernel: Mitsuba's samplers build their stratification from it
+(``multijitter`` permutes within a grid of that many cells).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+
+def render_film(scene: Any, sensor: Any, integrator: Any, spp: int, seed: int) -> np.ndarray:
+    """Linear radiance and the integrator's AOVs, (H, W, 3 + AOVs) float32, of ``sensor``
+    (whose film is ``hdrfilm`` with a box filter, without alpha) rendered with ``integrator``
+    at ``spp`` samples per pixel from ``seed``.
+
+    Each pixel's value is the mean of its samples' weighted radiance, as the film's
+    development gives it for a box filter (every sample has weight 1 in its own pixel).
+    """
+    import drjit as dr
+    import mitsuba as mi
+
+    film = sensor.film()
+    if not film.rfilter().is_box_filter() or film.sample_border():
+        raise ValueError("render_film takes a box-filtered film without a sampled border")
+    if sensor.needs_aperture_sample():
+        raise ValueError("render_film takes a pinhole sensor (no aperture sample)")
+    if sensor.shutter_open_time() > 0.0:
+        raise ValueError("render_film takes a sensor with an instantaneous shutter")
+    width, height = (int(v) for v in film.crop_size())
+    n_pixels = width * height
+    sampler = sensor.sampler().clone()
+    sampler.set_sample_count(spp)
+    sampler.set_samples_per_wavefront(spp)
+    sampler.seed(dr.opaque(mi.UInt32, seed), n_pixels * spp)
+
+    # Samples of one pixel are neighbours in the wavefront, as in Mitsuba's loop.
+    pixel = dr.arange(mi.UInt32, n_pixels * spp) // dr.opaque(mi.UInt32, spp)
+    row = pixel // dr.opaque(mi.UInt32, width)
+    position = mi.Point2f(mi.Float(pixel - row * dr.opaque(mi.UInt32, width)), mi.Float(row))
+    film_scale = mi.Point2f(dr.opaque(mi.Float, 1.0 / width), dr.opaque(mi.Float, 1.0 / height))
+    on_film = (position + sampler.next_2d()) * film_scale
+    ray = _pinhole_rays(sensor, on_film, width, height, spp)
+    spectrum, _valid, aovs = integrator.sample(scene, sampler, ray, sensor.get_medium(), True)
+    if len(aovs) != len(integrator.aov_names()):
+        raise ValueError("render_film takes integrators whose sample() returns their AOVs only")
+    # An RGB variant's rays carry weight 1: the radiance is the sample's value.
+    channels = [spectrum.x, spectrum.y, spectrum.z, *aovs]
+
+    # On the CPU drjit sums into one private copy of the target per thread ("expand" mode, as
+    # Mitsuba's film does) and writes the target's length into the kernel: a length rounded up
+    # to a power of two lets every image size in the same octave share the kernel.
+    capacity = 1 << (n_pixels - 1).bit_length()
+    sums = [dr.zeros(mi.Float, capacity) for _ in channels]
+    for total, value in zip(sums, channels, strict=True):
+        dr.scatter_reduce(dr.ReduceOp.Add, total, value, pixel)
+    # Divided as the film's development divides by its weights (drjit's division, whose
+    # rounding under fast math is not numpy's).
+    count = dr.opaque(mi.Float, spp)
+    means = [total / count for total in sums]
+    dr.eval(means)
+    image = np.stack([np.array(mean, dtype=np.float32)[:n_pixels] for mean in means], axis=-1)
+    return image.reshape(height, width, len(channels))
+
+
+def _pinhole_rays(sensor: Any, on_film: Any, width: int, height: int, spp: int) -> Any:
+    """The ray differentials of Mitsuba's ``perspective`` sensor through film positions
+    ``on_film`` (in [0, 1]²), computed as its ``sample_ray_differential`` does but without the
+    film's size as a constant: that method scales the principal-point offset (0 here) by the
+    film's size and so bakes it into the kernel.
+    """
+    import drjit as dr
+    import mitsuba as mi
+
+    # The sensor's camera-to-sample transform stores its inverse: this is the sensor's own
+    # sample-to-camera matrix, not a recomputed one.
+    sample_to_camera = sensor.projection_transform().inverse()
+    to_world = sensor.world_transform()
+    near_p = mi.Vector3f(sample_to_camera @ mi.Point3f(on_film.x, on_film.y, 0.0))
+    origin = sample_to_camera @ mi.Point3f(0.0)
+    # Offsets, not points: Vectors, which the camera's to-world transform does not translate.
+    step_x, step_y = dr.opaque(mi.Float, 1.0 / width), dr.opaque(mi.Float, 1.0 / height)
+    dx = mi.Vector3f(sample_to_camera @ mi.Point3f(step_x, 0.0, 0.0) - origin)
+    dy = mi.Vector3f(sample_to_camera @ mi.Point3f(0.0, step_y, 0.0) - origin)
+    d = dr.normalize(near_p)
+    inv_z = dr.rcp(d.z)
+    near_t = dr.opaque(mi.Float, sensor.near_clip()) * inv_z
+    far_t = dr.opaque(mi.Float, sensor.far_clip()) * inv_z
+    ray = mi.RayDifferential3f()
+    ray.time = mi.Float(sensor.shutter_open())
+    ray.d = to_world @ d
+    ray.o = to_world.translation() + ray.d * near_t
+    ray.maxt = far_t - near_t
+    ray.o_x = ray.o_y = ray.o
+    ray.d_x = to_world @ dr.normalize(near_p + dx)
+    ray.d_y = to_world @ dr.normalize(near_p + dy)
+    ray.has_differentials = True
+    ray.scale_differential(dr.opaque(mi.Float, 1.0 / np.sqrt(np.float32(spp))))
+    return ray
