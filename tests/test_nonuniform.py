@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.integrate import simpson
 
-from conftest import cli_run
+from conftest import cli_run, small_spec
 from seahaze import fileio
 from seahaze.fog_layer import fog_layer_medium
 from seahaze.haze_field import Bank, Drift, HazeField, Patches, fractal_noise
@@ -250,3 +250,38 @@ def test_a_bank_rolling_in_darkens_the_view_frame_by_frame(tmp_path):
     assert means[0] < means[1] < means[2]
     tug = [m["vessels"][0]["levels"]["v1000"]["optical_depth_centre"] for m in metas]
     assert tug[0] <= tug[1] <= tug[2] < tug[0] * 1.05
+
+
+def test_a_drifting_banks_frames_share_the_haze_box_and_so_its_kernels(tmp_path):
+    """Mitsuba's grid volume writes the haze box into the render kernels: the box widens for the
+    bank's thin side on a ladder of widths (2^(1/4) apart), so frames whose banks need about the
+    same width get the same box and run the same kernels, while each box still reaches 8
+    optical depths along its thinnest line of sight. Uniform haze keeps its exact width."""
+    from seahaze.camera import Camera
+    from seahaze.haze import haze_box_half_width
+    from seahaze.render.scene import haze_box_width
+    from seahaze.scene_medium import scene_haze_medium
+    from seahaze.visibility import extinction_coefficient
+
+    path = tmp_path / "bankseq.yaml"
+    path.write_text(BANK_SEQUENCE)
+    spec, _ = load_scene(path)
+    camera = Camera.from_spec(spec.camera)
+    sigma = extinction_coefficient(1000.0)
+    widths, exact = [], []
+    for frame in range(3):
+        medium = scene_haze_medium(spec, camera, frame)
+        base = haze_box_half_width(sigma)
+        thinnest = medium.thinnest_horizontal_mean(camera, base)
+        assert thinnest < 1.0  # the bank's near side is thinner than the mean
+        exact.append(haze_box_half_width(sigma * thinnest))
+        widths.append(haze_box_width(medium, camera, sigma))
+    assert widths[1] == widths[2]
+    for width, needed in zip(widths, exact, strict=True):
+        assert needed <= width < needed * 2.0 ** 0.25
+        rung = 4.0 * np.log2(width / haze_box_half_width(sigma))
+        assert abs(rung - round(rung)) < 1e-9
+    uniform = scene_haze_medium(small_spec(), camera)
+    assert haze_box_width(uniform, camera, sigma) == max(
+        haze_box_half_width(sigma), 3.0 * (uniform.top_m - uniform.bottom_m)
+    )

@@ -66,6 +66,9 @@ BOX_THIN_GROWTH = 4.0
 """Most the haze box widens for haze thinner than ``σ`` along some horizontal line of sight
 in view (:meth:`seahaze.medium.HazeMedium.thinnest_horizontal_mean`): a bank off to one side;
 beyond that the reference mode's grid would grow too coarse to follow the field."""
+BOX_RUNGS_PER_OCTAVE = 4
+"""Widths the haze box takes per doubling when it widens for a thin line of sight (each
+2^(1/4) ≈ 1.19 times the last): :func:`_next_box_rung`."""
 BOX_LAYER_WIDTHS = 3.0
 """Least half-width of the haze box in thicknesses ``H`` of the layer (``haze.top_m`` minus its
 bottom). In dense haze the light reaches the camera by diffusing down through the layer, and
@@ -257,6 +260,33 @@ class LoadedScene:
         self.params.update()
 
 
+def haze_box_width(
+    medium: HazeMedium, camera: Camera, sigma_min: float, reach_m: float = 0.0
+) -> float:
+    """Half width (m) of the haze box around ``camera`` for levels whose clearest extinction is
+    ``sigma_min`` (1/m) and objects out to ``reach_m``: 8 optical depths to the wall
+    (:func:`seahaze.haze.haze_box_half_width`), along the thinnest horizontal line of sight in
+    view where ``medium`` is thinner than its mean there (a bank off to one side), then at most
+    :data:`BOX_THIN_GROWTH` times wider and on the ladder of :func:`_next_box_rung`; and at least
+    :data:`BOX_LAYER_WIDTHS` layer thicknesses."""
+    half_width = haze_box_half_width(sigma_min, reach_m)
+    thinnest = medium.thinnest_horizontal_mean(camera, half_width)
+    widened = haze_box_half_width(sigma_min * max(thinnest, 1.0 / BOX_THIN_GROWTH), reach_m)
+    if widened > half_width:
+        widened = _next_box_rung(widened, half_width)
+    return max(half_width, widened, BOX_LAYER_WIDTHS * (medium.top_m - medium.bottom_m))
+
+
+def _next_box_rung(widened: float, base: float) -> float:
+    """``widened`` rounded up to the next of :data:`BOX_RUNGS_PER_OCTAVE` widths per doubling
+    of ``base``. Mitsuba's grid volume writes its box into the render kernels as constants, so
+    a box that followed a drifting bank exactly would compile them again for every frame; on
+    the ladder, frames (and scenes) whose banks need about the same width share them. A box
+    wider than needed only costs the grid's cells some resolution."""
+    rung = math.ceil(BOX_RUNGS_PER_OCTAVE * math.log2(widened / base) - 1e-9)
+    return base * 2.0 ** (rung / BOX_RUNGS_PER_OCTAVE)
+
+
 def _box_corners(
     camera: Camera, half_width: float, bottom: float, top: float
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -304,12 +334,7 @@ def build_scene(
         channel_extinction(v, haze.threshold, haze.extinction_spectrum).min()
         for v in visibilities_m or [1.0e4]
     )
-    # 8 optical depths to the wall along the thinnest horizontal line of sight in view (a
-    # bank off to one side leaves some thinner than σ), at most BOX_THIN_GROWTH times wider.
-    half_width = haze_box_half_width(sigma_min, reach_m)
-    thinnest = medium.thinnest_horizontal_mean(camera, half_width)
-    widened = haze_box_half_width(sigma_min * max(thinnest, 1.0 / BOX_THIN_GROWTH), reach_m)
-    half_width = max(half_width, widened, BOX_LAYER_WIDTHS * (top - bottom))
+    half_width = haze_box_width(medium, camera, sigma_min, reach_m)
     inside = camera.height_m < top and haze_box
     integrator = {"type": "volpath", "max_depth": spec.render.max_depth, "rr_depth": 8}
     scene: dict[str, Any] = {
