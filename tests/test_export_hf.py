@@ -39,6 +39,7 @@ NEEDS_PYARROW = pytest.mark.skipif(
     not HAS_PYARROW, reason="pyarrow is not installed: pip install 'seahaze[hf]'"
 )
 
+
 def export(dataset: Path, out: Path, *flags: str) -> tuple[int, str, str]:
     return cli_run(["export", str(dataset), "--layout", "hf", "--out", str(out), *flags], 120)
 

@@ -210,7 +210,13 @@ def test_uniform_scenes_record_the_config_they_did():
     existed (no new keys), so its datasets resume unchanged."""
     spec, _ = load_scene(Path(__file__).resolve().parents[1] / "scenes" / "default.yaml")
     assert set(spec.haze.model_dump(mode="json")) == {
-        "levels", "threshold", "extinction_spectrum", "albedo", "g", "top_m", "fog_layer"
+        "levels",
+        "threshold",
+        "extinction_spectrum",
+        "albedo",
+        "g",
+        "top_m",
+        "fog_layer",
     }
 
 
@@ -278,7 +284,7 @@ def test_a_drifting_banks_frames_share_the_haze_box_and_so_its_kernels(tmp_path)
         widths.append(haze_box_width(medium, camera, sigma))
     assert widths[1] == widths[2]
     for width, needed in zip(widths, exact, strict=True):
-        assert needed <= width < needed * 2.0 ** 0.25
+        assert needed <= width < needed * 2.0**0.25
         rung = 4.0 * np.log2(width / haze_box_half_width(sigma))
         assert abs(rung - round(rung)) < 1e-9
     uniform = scene_haze_medium(small_spec(), camera)

@@ -156,5 +156,3 @@ def fog_layer_medium(
     if not math.isfinite(scale):
         raise ValueError("the fog layer's density at the camera's height is not finite")
     return FogLayer(fog_top_m, edge_m, above_ratio, top_m, scale, albedo, g)
-
-

@@ -278,9 +278,7 @@ class HazeIntegrator(mi.SamplingIntegrator):
         levels = self.levels
         enter, length = levels.segment(p.ray.o, p.ray.d, t_end)
         segment = [levels.transmittance(k, length) for k in range(self.n_levels)]
-        sun_mis = dr.select(
-            p.prev_delta, 1.0, mis_weight(p.prev_pdf, self.aureole_pdf(p.ray.d))
-        )
+        sun_mis = dr.select(p.prev_delta, 1.0, mis_weight(p.prev_pdf, self.aureole_pdf(p.ray.d)))
         weight = None if camera else p.beta
         in_haze = p.active & (length > 0.0)
         along = self.inscatter(

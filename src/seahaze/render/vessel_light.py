@@ -249,6 +249,7 @@ class VesselLightPass(HazeIntegrator):
         and ``u`` rescaled to [0, 1). One pass: each vessel replaces the choice with its
         share of the weight so far, and ``u`` is rescaled within the branch it took, so one
         number serves the draw and the next decision."""
+
         def body(i, total, chosen, u):
             w = weigh(i)
             total = total + w
@@ -280,6 +281,7 @@ class VesselLightPass(HazeIntegrator):
     def past_vessels(self, scene, si, d, active):
         """The first surface along ``d`` beyond ``si`` that is not a vessel (the sea, or
         nothing) and its distance from ``si``: the open sea behind a vessel."""
+
         def body(o, t, going, count):
             nxt = scene.ray_intersect(mi.Ray3f(o, d), going)
             through = going & self.is_vessel(nxt)
