@@ -156,16 +156,19 @@ def render_radiance(
     *,
     clean: bool = False,
     clip: bool = True,
+    stratified: bool = False,
 ) -> np.ndarray:
     """Render linear RGB radiance (H, W, 3) float32 with the scene's current medium, by the
     scene's integrator or ``integrator`` (the physical mode's); ``clean`` renders the scene
     without the haze box (:attr:`LoadedScene.clean_scene`); ``clip=False`` keeps negative
-    values (a correction, not a radiance)."""
+    values (a correction, not a radiance); ``stratified`` draws from seahaze's multi-jittered
+    sampler (:func:`seahaze.render.wavefront.render_film`; Python integrators only)."""
     scene = loaded.clean_scene if clean and loaded.clean_scene is not None else loaded.scene
     if not loaded.has_haze_box and sensor_index == 0:
         spp = stratified_spp(spp)  # the physical scene's multijitter sampler: no rounding up
     integrator = integrator if integrator is not None else scene.integrator()
-    image = render_film(scene, scene.sensors()[sensor_index], integrator, spp, seed)
+    sensor = scene.sensors()[sensor_index]
+    image = render_film(scene, sensor, integrator, spp, seed, stratified=stratified)
     # Mitsuba 3.9's sunsky gives the sun a negative blue radiance below about 3 deg elevation
     # (RGB -58 for +3819 red: its reddened colour lies outside the sRGB gamut), so the sun, its
     # glint and sunlit pixels can come out negative in blue. Clipping at zero is the gamut clip

@@ -174,7 +174,9 @@ class PhysicalRenderer:
                 part_tables = np.zeros((grid.n_z, grid.n_mu, grid.n_phi, 3), np.float32)
             camera_pass = self.integrator("camera", part_sigma, albedo, g, part_tables)
             say(f"camera pass{of}, {stratified_spp(spp)} spp")
-            image = render_radiance(self.loaded, stratified_spp(spp), seed, integrator=camera_pass)
+            image = render_radiance(
+                self.loaded, stratified_spp(spp), seed, integrator=camera_pass, stratified=True
+            )
             if clean is None:
                 clean = image[..., :3].copy()
             if len(sigma):
@@ -206,7 +208,9 @@ class PhysicalRenderer:
         integrator.set_vessels(self.sea_id, self.loaded.vessel_spheres)
         pass_seed = render_seed(seed, RenderPass.VESSEL_LIGHT)
         samples = vessel_light_spp(spp, self.settings)
-        image = render_radiance(self.loaded, samples, pass_seed, integrator=integrator, clip=False)
+        image = render_radiance(
+            self.loaded, samples, pass_seed, integrator=integrator, clip=False, stratified=True
+        )
         if self.geometry is None:
             self.geometry = render_geometry(self.loaded)
         labels = segments(self.geometry.instance, self.geometry.distance_m)

@@ -14,8 +14,9 @@ the same octave shares one compiled kernel (the per-thread sums' length is the o
 in it). The sums are drjit's per-thread ones, as in Mitsuba's film: the same bytes for the
 same seed on the CPU; on a GPU they are atomic and their order varies in the last bits.
 
-The sample count still shapes the kernel: Mitsuba's samplers build their stratification from it
-(``multijitter`` permutes within a grid of that many cells).
+Mitsuba's samplers write the sample count into the kernel too (``multijitter`` permutes within a
+grid of that many cells); the ``physical`` mode's integrators draw instead from
+:mod:`seahaze.render.stratified`, the same sampler with the count as a parameter.
 """
 
 from __future__ import annotations
@@ -25,10 +26,17 @@ from typing import Any
 import numpy as np
 
 
-def render_film(scene: Any, sensor: Any, integrator: Any, spp: int, seed: int) -> np.ndarray:
+def render_film(
+    scene: Any, sensor: Any, integrator: Any, spp: int, seed: int, *, stratified: bool = False
+) -> np.ndarray:
     """Linear radiance and the integrator's AOVs, (H, W, 3 + AOVs) float32, of ``sensor``
     (whose film is ``hdrfilm`` with a box filter, without alpha) rendered with ``integrator``
     at ``spp`` samples per pixel from ``seed``.
+
+    ``stratified``: draw from :class:`~seahaze.render.stratified.StratifiedSampler` (the same
+    numbers as Mitsuba's ``multijitter``, with the count out of the kernel) instead of the
+    sensor's sampler; for integrators written in Python, which only ask it for ``next_1d``
+    and ``next_2d`` (Mitsuba's own integrators need one of its samplers).
 
     Each pixel's value is the mean of its samples' weighted radiance, as the film's
     development gives it for a box filter (every sample has weight 1 in its own pixel).
@@ -45,10 +53,15 @@ def render_film(scene: Any, sensor: Any, integrator: Any, spp: int, seed: int) -
         raise ValueError("render_film takes a sensor with an instantaneous shutter")
     width, height = (int(v) for v in film.crop_size())
     n_pixels = width * height
-    sampler = sensor.sampler().clone()
-    sampler.set_sample_count(spp)
-    sampler.set_samples_per_wavefront(spp)
-    sampler.seed(dr.opaque(mi.UInt32, seed), n_pixels * spp)
+    if stratified:
+        from .stratified import StratifiedSampler
+
+        sampler = StratifiedSampler.seeded(spp, seed, n_pixels * spp)
+    else:
+        sampler = sensor.sampler().clone()
+        sampler.set_sample_count(spp)
+        sampler.set_samples_per_wavefront(spp)
+        sampler.seed(dr.opaque(mi.UInt32, seed), n_pixels * spp)
 
     # Samples of one pixel are neighbours in the wavefront, as in Mitsuba's loop.
     pixel = dr.arange(mi.UInt32, n_pixels * spp) // dr.opaque(mi.UInt32, spp)
