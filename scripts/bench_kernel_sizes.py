@@ -4,10 +4,10 @@ The default scene's physical pass (clean + 11 levels) is rendered in one process
 drjit kernel cache (``HOME`` pointed at a new folder, as on a fresh machine), at 160×90 and
 16 spp, then at 128×72 (a new size whose pixel count lies in the same octave: 9,216 and 14,400
 are both in (8,192, 16,384]), then at 192×108 (a new size in the next octave), then at 160×90
-and 25 spp (a new sample count). drjit's kernel history gives each launched kernel's operation count and the time its
-backend (LLVM or the CUDA driver) spent compiling it; a kernel the cache held costs no backend
-time. The largest kernels of each render are listed, and the "Cold start" section of
-docs/benchmarks.md is written.
+and 25 spp (a new sample count). drjit's kernel history gives each launched kernel's
+operation count and the time its backend (LLVM or the CUDA driver) spent compiling it; a kernel
+the cache held costs no backend time. The largest kernels of each render are listed, and the
+"Cold start" section of docs/benchmarks.md is written.
 
 Usage: python scripts/bench_kernel_sizes.py [--doc]
 """
