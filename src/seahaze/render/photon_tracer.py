@@ -205,6 +205,7 @@ def trace_fluence(
 
     dr.while_loop((z, *d, *w, active, flights, rng), cond, body)
     dr.eval(tally)
+    dr.sync_thread()  # wait with Python's lock let go: Ctrl-C's watcher (seahaze.interrupts)
     sums = np.array(tally).reshape(n_levels, slab.n_z, slab.n_dir, CELL)
     return _fluence(sums[..., 0:3], sums[..., 4:7], slab) * scale
 

@@ -88,6 +88,10 @@ def render_film(
     count = dr.opaque(mi.Float, spp)
     means = [total / count for total in sums]
     dr.eval(means)
+    # Wait for the kernel here, where drjit lets go of Python's lock: numpy's copy below would
+    # wait holding it, and seahaze.interrupts' watcher thread, which ends the process on
+    # Ctrl-C during a render, could not run until the whole pass had finished.
+    dr.sync_thread()
     image = np.stack([np.array(mean, dtype=np.float32)[:n_pixels] for mean in means], axis=-1)
     return image.reshape(height, width, len(channels))
 
