@@ -83,14 +83,17 @@ def render_film(
     sums = [dr.zeros(mi.Float, capacity) for _ in channels]
     for total, value in zip(sums, channels, strict=True):
         dr.scatter_reduce(dr.ReduceOp.Add, total, value, pixel)
+    # Compile and run the pass here, in drjit's eval and sync, which let go of Python's lock.
+    # Reading a scatter's target (the division below, numpy's copy) would do both holding it,
+    # and seahaze.interrupts' watcher thread, which ends the process on Ctrl-C during a
+    # render, could not run until the pass had been compiled and run.
+    dr.eval(sums)
+    dr.sync_thread()
     # Divided as the film's development divides by its weights (drjit's division, whose
     # rounding under fast math is not numpy's).
     count = dr.opaque(mi.Float, spp)
     means = [total / count for total in sums]
     dr.eval(means)
-    # Wait for the kernel here, where drjit lets go of Python's lock: numpy's copy below would
-    # wait holding it, and seahaze.interrupts' watcher thread, which ends the process on
-    # Ctrl-C during a render, could not run until the whole pass had finished.
     dr.sync_thread()
     image = np.stack([np.array(mean, dtype=np.float32)[:n_pixels] for mean in means], axis=-1)
     return image.reshape(height, width, len(channels))
