@@ -62,8 +62,15 @@ def _interrupt(
 ) -> tuple[int, float]:
     """Start ``command``, wait until ``ready(process)`` and ``delay_s`` more, send
     ``signum``; its exit code and the seconds from the signal to its exit."""
+    # A terminal's Ctrl-C: the child starts with the signal's default handling even when this
+    # run inherited it ignored (a job started with & by a shell without job control ignores
+    # SIGINT, and seahaze rightly leaves an ignored SIGINT ignored).
     process = subprocess.Popen(
-        command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
+        command,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signum, signal.SIG_DFL),
     )
     try:
         deadline = time.monotonic() + 120
