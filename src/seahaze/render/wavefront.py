@@ -11,8 +11,9 @@ opaque values. It draws the same samples in the same order as Mitsuba's loop, so
 equal ``mi.render``'s to the rounding of each pixel's sum (Mitsuba's film orders the additions
 by its own rules; ``tests/test_wavefront.py``), and every image size whose pixel count lies in
 the same octave shares one compiled kernel (the per-thread sums' length is the one size left
-in it). The sums are drjit's per-thread ones, as in Mitsuba's film: the same bytes for the
-same seed on the CPU; on a GPU they are atomic and their order varies in the last bits.
+in it). The sums are drjit's per-thread ones, as in Mitsuba's film, so its reproducibility is
+the film's: the same bytes for the same seed on the CPU, with the exception docs/limits.md
+states; on a GPU the adds are atomic and their order varies in the last bits.
 
 Mitsuba's samplers write the sample count into the kernel too (``multijitter`` permutes within a
 grid of that many cells); the ``physical`` mode's integrators draw instead from
@@ -69,7 +70,7 @@ def render_film(
     position = mi.Point2f(mi.Float(pixel - row * dr.opaque(mi.UInt32, width)), mi.Float(row))
     film_scale = mi.Point2f(dr.opaque(mi.Float, 1.0 / width), dr.opaque(mi.Float, 1.0 / height))
     on_film = (position + sampler.next_2d()) * film_scale
-    ray = _pinhole_rays(sensor, on_film, width, height, spp)
+    ray = _pinhole_rays(sensor, on_film, film_scale, spp)
     spectrum, _valid, aovs = integrator.sample(scene, sampler, ray, sensor.get_medium(), True)
     if len(aovs) != len(integrator.aov_names()):
         raise ValueError("render_film takes integrators whose sample() returns their AOVs only")
@@ -99,11 +100,12 @@ def render_film(
     return image.reshape(height, width, len(channels))
 
 
-def _pinhole_rays(sensor: Any, on_film: Any, width: int, height: int, spp: int) -> Any:
+def _pinhole_rays(sensor: Any, on_film: Any, pixel_size: Any, spp: int) -> Any:
     """The ray differentials of Mitsuba's ``perspective`` sensor through film positions
-    ``on_film`` (in [0, 1]²), computed as its ``sample_ray_differential`` does but without the
-    film's size as a constant: that method scales the principal-point offset (0 here) by the
-    film's size and so bakes it into the kernel.
+    ``on_film`` (in [0, 1]², pixels ``pixel_size`` apart: the film's scale), computed as its
+    ``sample_ray_differential`` does but without the film's size as a constant: that method
+    scales the principal-point offset (0 here) by the film's size and so bakes it into the
+    kernel.
     """
     import drjit as dr
     import mitsuba as mi
@@ -115,9 +117,8 @@ def _pinhole_rays(sensor: Any, on_film: Any, width: int, height: int, spp: int) 
     near_p = mi.Vector3f(sample_to_camera @ mi.Point3f(on_film.x, on_film.y, 0.0))
     origin = sample_to_camera @ mi.Point3f(0.0)
     # Offsets, not points: Vectors, which the camera's to-world transform does not translate.
-    step_x, step_y = dr.opaque(mi.Float, 1.0 / width), dr.opaque(mi.Float, 1.0 / height)
-    dx = mi.Vector3f(sample_to_camera @ mi.Point3f(step_x, 0.0, 0.0) - origin)
-    dy = mi.Vector3f(sample_to_camera @ mi.Point3f(0.0, step_y, 0.0) - origin)
+    dx = mi.Vector3f(sample_to_camera @ mi.Point3f(pixel_size.x, 0.0, 0.0) - origin)
+    dy = mi.Vector3f(sample_to_camera @ mi.Point3f(0.0, pixel_size.y, 0.0) - origin)
     d = dr.normalize(near_p)
     inv_z = dr.rcp(d.z)
     near_t = dr.opaque(mi.Float, sensor.near_clip()) * inv_z
