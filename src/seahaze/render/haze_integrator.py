@@ -47,10 +47,11 @@ same random numbers, and a pair differs by the haze, not by Monte Carlo noise. T
 radiance is the integrator's RGB output; level ``k`` is the AOV channels ``k.R, k.G, k.B``.
 
 Every per-level input (``σ``, the mixture, the tables) and ``albedo``, ``g`` are drjit values,
-not literals: the kernel is compiled once per number of levels and reused for every scene. The
-camera segment is traced unrolled; every later one in a symbolic loop that a packet of lanes
-leaves once all its paths have ended (:meth:`HazeIntegrator.follow`; docs/physics.md, "The
-kernel").
+not literals: the kernel is compiled once per number of levels and reused for every scene.
+Every segment, the camera's included, runs in one symbolic loop that a packet of lanes leaves
+once all its paths have ended (:meth:`HazeIntegrator.follow`; docs/physics.md, "The kernel"):
+the segment's code is in the kernel once, and the camera segment's extra in-scattering points
+are a loop of their own (:meth:`HazeIntegrator.diffuse_sums`).
 """
 
 from __future__ import annotations
@@ -142,6 +143,8 @@ class HazeIntegrator(mi.SamplingIntegrator):
         # Where the sea's sun glint lies seen from a hull (glint_lobe module).
         self.glint = glint_lobe.GlintLobe(sun_axis(sun), wind_speed, settings.glint_share)
         self.levels = PassLevels(medium, n_levels, grey)
+        # A parameter: another count reuses the kernel.
+        self.camera_points = dr.opaque(mi.UInt32, settings.camera_points)
 
     def aov_names(self) -> list[str]:
         return [f"{k}.{c}" for k in range(self.n_levels) for c in "RGB"]
@@ -219,14 +222,14 @@ class HazeIntegrator(mi.SamplingIntegrator):
             p.res[k] += dr.select(lit, p.att[k] * weight * frac, 0.0)
 
     # -- the haze along a segment -----------------------------------------------------------
-    def inscatter(self, sampler, ray, enter, length, weight, att, res, active, sun_mis):
+    def inscatter(self, sampler, ray, enter, length, beta, n_points, att, res, active, sun_mis):
         """Add every level's unshadowed in-scattering along ``ray`` over ``[enter, enter +
         length]`` and return what the sun's part drew, for :meth:`shadow_correction`.
-        ``weight``: the path throughput, None on the camera segment; ``att``: each level's
-        transmittance so far; ``sun_mis``: the weight of the unshadowed sun against
-        :meth:`sample_aureole` at the surface the segment left. See the module docstring."""
+        ``beta``: the path throughput; ``n_points``: the stratified points the diffuse field
+        is read at (a UInt32); ``att``: each level's transmittance so far; ``sun_mis``: the
+        weight of the unshadowed sun against :meth:`sample_aureole` at the surface the segment
+        left. See the module docstring."""
         levels = self.levels
-        beta = mi.Color3f(1.0) if weight is None else weight
         sun_d = self.sun_cone_direction(sampler.next_2d(active))
         lit, sun = self.sun_source(sun_d, ray.d, active)
         mu_sun = dr.maximum(sun_d.z, 1e-6)
@@ -236,26 +239,45 @@ class HazeIntegrator(mi.SamplingIntegrator):
         depth, climb = levels.depth_toward_sun(h_entry, mu_sun), 1.0 - ray.d.z / mu_sun
         pick = sampler.next_1d(active)
         tables = levels.table.toward(-ray.d, levels.sun_cos_az, levels.sun_sin_az, pick)
-        # Stratified, and the same for every level (common random numbers).
-        n_points = self.settings.camera_points if weight is None else 1
-        us = [(i + sampler.next_1d(active)) / n_points for i in range(n_points)]
-        top = self.medium.reduced_top_m
+        mass = [levels.mass(k, length) for k in range(self.n_levels)]
+        diffuse = self.diffuse_sums(
+            sampler, tables, h_entry, ray.d.z, mass, length, n_points, active
+        )
+        per_point = 1.0 / mi.Float(n_points)
         for k in range(self.n_levels):
             # Unshadowed sun: transmittance to the point and on to the sun are both
             # exponential in s, so their product integrates in closed form.
             frac = levels.sun_scattered(k, None, depth, climb, length)
-            # The diffuse field: distances drawn from the level's own transmittance.
-            mass = levels.mass(k, length)
-            diffuse = mi.Color3f(0.0)
-            for u in us:
-                s = levels.own_distance(k, u, mass, length)
-                value = tables(k, (h_entry + s * ray.d.z) * (1.0 / top))
-                if not self.grey:  # distances follow green; reweight R and B
-                    value = value * dr.exp(-(levels.sigma[k] - levels.sg[k]) * s)
-                diffuse += value
-            source = sun * frac * sun_mis + (mass * levels.inv_sg[k] * (1.0 / n_points)) * diffuse
+            source = sun * frac * sun_mis + (mass[k] * levels.inv_sg[k] * per_point) * diffuse[k]
             res[k] += dr.select(active, att[k] * beta * source, 0.0)
         return SegmentSun(ray, active, enter, length, beta, sun_d, lit, sun, depth, climb)
+
+    def diffuse_sums(self, sampler, tables, h_entry, dz, mass, length, n_points, active):
+        """Each level's diffuse field (``tables``, :meth:`.TableTexture.toward`) summed over
+        ``n_points`` points of a segment entering the medium at reduced height ``h_entry`` and
+        climbing ``dz`` per metre over reduced ``length``: every level draws its distances in
+        proportion to its own transmittance (``mass``: :meth:`.PassLevels.mass` per level),
+        from the same stratified numbers (common random numbers). A symbolic loop, so that the
+        camera segment's several points and a later segment's one share the kernel's code."""
+        levels = self.levels
+        inv_top = 1.0 / self.medium.reduced_top_m
+        count = mi.Float(n_points)
+
+        def body(i, sampler, sums):
+            u = (mi.Float(i) + sampler.next_1d(active)) / count
+            for k in range(self.n_levels):
+                s = levels.own_distance(k, u, mass[k], length)
+                value = tables(k, (h_entry + s * dz) * inv_top)
+                if not self.grey:  # distances follow green; reweight R and B
+                    value = value * dr.exp(-(levels.sigma[k] - levels.sg[k]) * s)
+                sums[k] = sums[k] + value
+            return i + 1, sampler, sums
+
+        start = (mi.UInt32(0), sampler, [mi.Color3f(0.0) for _ in range(self.n_levels)])
+        _, _, sums = dr.while_loop(
+            start, lambda i, sampler, sums: i < n_points, body, label="haze_points"
+        )
+        return sums
 
     def shadow_correction(self, scene, sampler, along: SegmentSun, att, res) -> None:
         """Take from every level the sun's light that surfaces shade along the segment
@@ -271,18 +293,18 @@ class HazeIntegrator(mi.SamplingIntegrator):
             lost = levels.sun_scattered_at(k, along.depth, along.climb, s) * scale
             res[k] -= dr.select(shaded, att[k] * lost, 0.0)
 
-    def haze_along(self, sampler, p: HazePath, t_end: Any, camera: bool):
+    def haze_along(self, sampler, p: HazePath, t_end: Any, n_points: Any):
         """Each level's transmittance over path ``p``'s segment up to ``t_end`` (not yet
-        applied to ``p``) and the segment's unshadowed in-scattering added to ``p``; returns
-        both the transmittances and what the sun's part drew (:meth:`inscatter`)."""
+        applied to ``p``) and the segment's unshadowed in-scattering, read at ``n_points``
+        points, added to ``p``; returns both the transmittances and what the sun's part drew
+        (:meth:`inscatter`)."""
         levels = self.levels
         enter, length = levels.segment(p.ray.o, p.ray.d, t_end)
         segment = [levels.transmittance(k, length) for k in range(self.n_levels)]
         sun_mis = dr.select(p.prev_delta, 1.0, mis_weight(p.prev_pdf, self.aureole_pdf(p.ray.d)))
-        weight = None if camera else p.beta
         in_haze = p.active & (length > 0.0)
         along = self.inscatter(
-            sampler, p.ray, enter, length, weight, p.att, p.res, in_haze, sun_mis
+            sampler, p.ray, enter, length, p.beta, n_points, p.att, p.res, in_haze, sun_mis
         )
         return segment, along
 
@@ -323,12 +345,14 @@ class HazeIntegrator(mi.SamplingIntegrator):
         self.shade(scene, sampler, p, si)
         p.depth += 1
 
-    def bounce(self, scene: Any, sampler: Any, p: HazePath, camera: bool) -> None:
+    def bounce(self, scene: Any, sampler: Any, p: HazePath) -> None:
         """One segment of path ``p`` (updated in place): the haze along it, the sky and sun
         where it escapes, and at the surface it meets the lights and the next direction (up
-        to ``settings.bounces`` surfaces). ``camera``: the segment leaves the camera."""
+        to ``settings.bounces`` surfaces). The segment that leaves the camera reads the
+        diffuse field at ``settings.camera_points`` points, a later one at one."""
         si, t_end = self.trace(scene, p)
-        segment, along = self.haze_along(sampler, p, t_end, camera)
+        n_points = dr.select(p.depth == 0, self.camera_points, 1)
+        segment, along = self.haze_along(sampler, p, t_end, n_points)
         self.shadow_correction(scene, sampler, along, p.att, p.res)
         self.escape(scene, p, si, segment, self.sun_seen(si, p))
         self.turn(scene, sampler, p, si)
@@ -336,10 +360,11 @@ class HazeIntegrator(mi.SamplingIntegrator):
     def follow(self, scene: Any, sampler: Any, path: HazePath) -> HazePath:
         """Path ``path`` traced on, segment by segment, until it ends: in a loop that a
         packet of lanes leaves once all its paths have ended (most end at the sky after one
-        or two segments; an unrolled kernel paid for every bounce of every lane)."""
+        or two segments; an unrolled kernel paid for every bounce of every lane). The camera
+        segment runs in it too: one copy of a segment's code, half the kernel to compile."""
 
         def body(path, sampler):
-            self.bounce(scene, sampler, path, camera=False)
+            self.bounce(scene, sampler, path)
             return path, sampler
 
         path, _ = dr.while_loop(
@@ -397,9 +422,6 @@ class CameraPass(HazeIntegrator):
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
         path = HazePath.start(mi.Ray3f(ray), mi.Bool(active), self.n_levels, self.grey)
-        # The camera segment is unrolled (it takes settings.camera_points in-scattering
-        # points); later ones run in follow's loop.
-        self.bounce(scene, sampler, path, camera=True)
         path = self.follow(scene, sampler, path)
         aovs = [c for r in path.res for c in (r.x, r.y, r.z)]
         return mi.Spectrum(path.clean), mi.Bool(True), aovs

@@ -21,6 +21,7 @@ Units: metres, radiance in the scene's units, extinction in 1/m.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import drjit as dr
@@ -97,38 +98,37 @@ class VesselLightPass(HazeIntegrator):
             * scale
             for k in range(self.n_levels)
         ]
+        # Only one of the two paths goes on past its first vertex, each with probability ½
+        # and twice the weight (unbiased): following them is most of the pass's time, and a
+        # packet runs the loop while any of its lanes goes on.
+        go_seen = sampler.next_1d(on_vessel) < 0.5
+        end, beyond = self.past_vessels(scene, si, d, on_vessel)
 
-        # Once, and only for packets where a lane met a vessel: a loop that a packet with
-        # no active lane skips, where a masked block costs every lane.
-        def body(res, pending, sampler):
-            seen = HazePath.start(probe, pending, self.n_levels, self.grey)
-            seen.att, seen.depth = list(start), mi.UInt32(1)
-            self.shade(scene, sampler, seen, si)
-            seen.depth += 1
-            end, beyond = self.past_vessels(scene, si, d, pending)
-            assumed = HazePath.start(mi.Ray3f(si.p, d), pending, self.n_levels, self.grey)
-            assumed.att, assumed.depth = list(start), mi.UInt32(1)
-            self.open_sea_bounce(scene, sampler, assumed, end, beyond)
-            # Only one of the two paths goes on past its first vertex, each with probability
-            # ½ and twice the weight (unbiased): following them is most of the pass's time,
-            # and a packet runs the loop while any of its lanes goes on.
-            go_seen = sampler.next_1d(pending) < 0.5
-            onward = dr.select(go_seen, seen, assumed)
-            onward.res = [dr.zeros(mi.Color3f) for _ in range(self.n_levels)]
-            onward = self.follow(scene, sampler, onward)
-            sign = dr.select(go_seen, 2.0, -2.0)
-            res = [
-                r + dr.select(pending, a - b + sign * o, 0.0)
-                for r, a, b, o in zip(res, seen.res, assumed.res, onward.res, strict=True)
-            ]
-            return res, mi.Bool(False), sampler
+        def first(seen: bool) -> HazePath:
+            """The seen (at the vessel) or assumed (from it on through the open sea) path
+            before its first vertex."""
+            ray = probe if seen else mi.Ray3f(si.p, d)
+            path = HazePath.start(ray, on_vessel, self.n_levels, self.grey)
+            path.att, path.depth = list(start), mi.UInt32(1)
+            return path
 
-        res[:], _, _ = dr.while_loop(
-            (res, on_vessel, sampler),
-            lambda res, pending, sampler: pending,
-            body,
-            label="vessel_light",
-        )
+        vertex = _FirstVertices(si, end, beyond, go_seen)
+        state = (dr.select(go_seen, first(False), first(True)), mi.UInt32(0), res, sampler)
+
+        def body(p, step, res, sampler):
+            self.probe_step(scene, sampler, p, vertex, step)
+            weight = vertex.weight(step)
+            # The step's light, whether or not the path goes on (it may have escaped).
+            res = [r + weight * o for r, o in zip(res, p.res, strict=True)]
+            p.res = [dr.zeros(mi.Color3f) for _ in range(self.n_levels)]
+            # After the first path's vertex, the second path starts at its own.
+            p = dr.select(step == 0, dr.select(go_seen, first(True), first(False)), p)
+            return p, dr.minimum(step + 1, 2), res, sampler
+
+        def going(p, step, res, sampler):
+            return on_vessel & ((step == 0) | p.active)
+
+        _, _, res[:], _ = dr.while_loop(state, going, body, label="vessel_light")
 
     def probe_point(self, ray, enter, length, sampler, active):
         """A distance ``s`` along the camera segment (from ``enter``, ``length`` long) and
@@ -294,12 +294,52 @@ class VesselLightPass(HazeIntegrator):
         end = scene.ray_intersect(mi.Ray3f(o, d), active)
         return end, dr.select(end.is_valid(), t + end.t, dr.inf)
 
-    def open_sea_bounce(self, scene, sampler, p: HazePath, si: Any, t_end: Any) -> None:
-        """One segment of path ``p`` through the open sea's haze that the tables assumed,
-        ending at ``si`` (``t_end`` metres on): no surface shades the sun from it and the
-        sun's disk is not its light (its single scattering is computed with shadow rays);
-        then the surface's lights and next direction, as the main pass's
-        :meth:`~seahaze.render.haze_integrator.HazeIntegrator.bounce`."""
-        segment, _ = self.haze_along(sampler, p, t_end, camera=False)
-        self.escape(scene, p, si, segment, mi.Color3f(0.0))
+    def probe_step(self, scene, sampler, p: HazePath, vertex: _FirstVertices, step) -> None:
+        """One step of :meth:`vessel_light`'s loop for path ``p``: at ``step`` 0 and 1 the
+        first vertices of the seen and the assumed path (in the order :class:`_FirstVertices`
+        gives), then the continued path's later segments as the main pass's
+        :meth:`~seahaze.render.haze_integrator.HazeIntegrator.bounce`. The seen path's first
+        vertex is the vessel itself (no haze before it: the probe's weight holds it); the
+        assumed path's runs through the open sea's haze that the tables assumed, to the first
+        surface that is not a vessel, with no surface shading the sun and not the sun's disk
+        as its light (its single scattering is computed with shadow rays)."""
+        seen, assumed = vertex.seen_at(step), vertex.assumed_at(step)
+        later = p.active & (step >= 2)
+        traced = scene.ray_intersect(p.ray, later)
+        si = dr.select(seen, vertex.vessel, dr.select(assumed, vertex.open_sea, traced))
+        t_end = dr.select(traced.is_valid(), traced.t, dr.inf)
+        t_end = dr.select(seen, 0.0, dr.select(assumed, vertex.open_sea_t, t_end))
+        segment, along = self.haze_along(sampler, p, t_end, mi.UInt32(1))
+        along.lit &= later
+        self.shadow_correction(scene, sampler, along, p.att, p.res)
+        sun = self.sun_seen(si, p)
+        self.escape(scene, p, si, segment, dr.select(later, sun, 0.0))
         self.turn(scene, sampler, p, si)
+
+
+@dataclass
+class _FirstVertices:
+    """Where :meth:`VesselLightPass.vessel_light`'s two paths meet their first surface, and
+    in which order its loop takes them: the one that stops after its first vertex first."""
+
+    vessel: Any
+    """The vessel the probe met: the seen path's first vertex."""
+    open_sea: Any
+    """The first surface beyond it that is not a vessel (or none: the sky): the assumed
+    path's."""
+    open_sea_t: Any
+    """Its distance from the vessel (m; ``inf``: the sky)."""
+    go_seen: Any
+    """Whether the seen path goes on past its first vertex (else the assumed one)."""
+
+    def seen_at(self, step: Any) -> Any:
+        return ((step == 0) & ~self.go_seen) | ((step == 1) & self.go_seen)
+
+    def assumed_at(self, step: Any) -> Any:
+        return ((step == 0) & self.go_seen) | ((step == 1) & ~self.go_seen)
+
+    def weight(self, step: Any) -> Any:
+        """What step ``step``'s light counts for: +1 at the seen vertex, −1 at the assumed
+        one, then ±2 for the continued path (the seen one's + or the assumed one's −)."""
+        sign = dr.select(self.seen_at(step) | ((step >= 2) & self.go_seen), 1.0, -1.0)
+        return dr.select(step >= 2, 2.0 * sign, sign)
