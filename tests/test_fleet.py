@@ -91,7 +91,8 @@ def test_every_part_keeps_its_faces_paint_and_vessel() -> None:
             faces = mesh.faces[start : start + len(part.faces)]
             np.testing.assert_array_equal(mesh.vertices[faces], part.vertices[part.faces])
             np.testing.assert_allclose(
-                mesh.paint[faces], np.broadcast_to(part.rgb, (*faces.shape, 3))
+                mesh.paint[start : start + len(part.faces)],
+                np.broadcast_to(part.rgb, (len(part.faces), 3)),
             )
             assert np.all(mesh.face_vessel[start : start + len(part.faces)] == index)
             start += len(part.faces)
@@ -198,3 +199,47 @@ def test_vessel_bsdfs_are_loaded_once_and_only_the_last_set_is_kept() -> None:
     # kernel otherwise.
     assert len(fleet.kept_bsdf_keys()) == len(ROUGHNESS_CLASSES)
     assert {key[2] for key in fleet.kept_bsdf_keys()} == {True}
+
+
+def _loaded(text: str, name: str):
+    from seahaze.render.scene import build_scene
+
+    spec = parse_scene_text(text, f"{name}.yaml")
+    camera = frame_camera(spec, None)
+    geometry = build_geometry(spec, camera, None)
+    return build_scene(spec, camera, geometry, [1000.0], haze_box=False), geometry
+
+
+@pytest.mark.usefixtures("mitsuba_variant")
+def test_each_scene_renders_its_own_paint_though_the_textures_are_shared() -> None:
+    """The vessels' paint textures are kept from scene to scene with their BSDFs and hold one
+    scene's paint at a time: a scene built first and rendered after another was built still
+    shows its own colours, and every vessel pixel's albedo is the paint of a part of the
+    vessel the geometry pass sees there."""
+    pytest.importorskip("mitsuba")
+    from seahaze.render.denoise import feature_buffers
+    from seahaze.render.passes import render_geometry
+
+    # Large enough for the near vessels to have inner pixels.
+    text = SCENE.replace("resolution: [64, 36]", "resolution: [256, 144]")
+    first, geometry = _loaded(text, "fleet")
+    alone = feature_buffers(first, seed=1, spp=1).albedo
+    instance = render_geometry(first).instance
+    other, _ = _loaded(text.replace("class: tug", "class: fishing_boat"), "other")
+    mine = other.vessel_materials[0].paint
+    assert mine is first.vessel_materials[0].paint  # shared
+    theirs = feature_buffers(other, seed=1, spp=1).albedo
+    again = feature_buffers(first, seed=1, spp=1).albedo
+    np.testing.assert_array_equal(again, alone)
+    # Pixels whose 3 × 3 neighbourhood is one vessel: its paint, whatever the sample position.
+    inner = np.ones_like(instance, bool)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            inner &= np.roll(instance, (dy, dx), axis=(0, 1)) == instance
+    inner &= instance >= 0
+    inner[[0, -1], :] = inner[:, [0, -1]] = False
+    assert inner.sum() >= 10
+    for y, x in zip(*np.nonzero(inner), strict=True):
+        paints = np.array([part.rgb for part in geometry.vessels[instance[y, x]].parts])
+        assert np.min(np.abs(paints - alone[y, x]).max(axis=1)) < 1e-6
+    assert not np.array_equal(theirs[inner], alone[inner])  # the other fleet is painted apart

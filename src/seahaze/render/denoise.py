@@ -78,6 +78,7 @@ def feature_buffers(loaded: LoadedScene, seed: int, spp: int = AUX_SPP) -> Featu
     integrator = mi.load_dict({"type": "aov", "aovs": "albedo:albedo,nn:sh_normal"})
     # The scene without the haze box where there is one: the box's null surface is no feature.
     scene = loaded.clean_scene if loaded.clean_scene is not None else loaded.scene
+    loaded.bind_paint()
     image = np.array(mi.render(scene, spp=spp, seed=seed, integrator=integrator), np.float32)
     albedo = np.clip(np.nan_to_num(image[..., 0:3]), 0.0, 1.0)
     normal = np.clip(np.nan_to_num(image[..., 3:6]), -1.0, 1.0)

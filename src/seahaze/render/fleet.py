@@ -11,11 +11,23 @@ Why
 How
     Every vessel part joins one mesh per roughness class (:data:`ROUGHNESS_CLASSES`: every
     built-in material's roughness, so built-in vessels are unchanged; a user mesh's roughness
-    goes to the nearest class). The part's paint colour becomes a per-vertex attribute,
-    :data:`PAINT_ATTRIBUTE`, read by the ``seahaze_vertex_paint`` texture. A class no vessel
-    uses holds one small triangle far under the sea, which no ray reaches. Each mesh records
-    which vessel every face belongs to (:attr:`FleetMesh.face_vessel`), so the geometry pass
-    tells the vessels apart by the hit's primitive index.
+    goes to the nearest class). The part's paint colour becomes a colour per face, read by the
+    ``seahaze_face_paint`` texture (:class:`FacePaint`) from an array the texture holds. A class
+    no vessel uses holds one small triangle far under the sea, which no ray reaches. Each mesh
+    records which vessel every face belongs to (:attr:`FleetMesh.face_vessel`), so the geometry
+    pass tells the vessels apart by the hit's primitive index.
+
+    drjit traces a BSDF virtual call once per BSDF; identical traces are compiled once. A paint
+    read from the mesh (a per-vertex attribute) was a virtual call to the shape nested inside
+    each BSDF's, whose table lies at a place of its own in each trace: the eleven classes'
+    roughplastic code was compiled eleven times at every BSDF call of a kernel (a third of the
+    ``physical`` mode's kernels). Read from the texture's own array it is traced the same for
+    every class and compiled once (docs/benchmarks.md, "What does a new image size or sample
+    count compile?").
+
+    The BSDFs and their textures are kept from scene to scene (:func:`vessel_materials`), so a
+    texture holds the paint of the scene that last bound it: every render of a scene binds its
+    own first (:meth:`seahaze.render.scene.LoadedScene.bind_paint`).
 
     roughplastic asks its diffuse texture for a mean colour once, to weigh sampling its
     specular coat against its diffuse base; the paint texture answers :data:`PAINT_MEAN` for
@@ -36,10 +48,8 @@ from ..world import MeshData, VesselInstance
 ROUGHNESS_CLASSES = (0.15, 0.3, 0.35, 0.4, 0.45, 0.5, 0.6, 0.65, 0.7, 0.8, 0.85)
 """Roughness of the vessel meshes: every roughness of the built-in vessels' materials
 (:mod:`seahaze.vessels`; a test keeps the two in step)."""
-PAINT_ATTRIBUTE = "vertex_paint"
-"""Per-vertex linear RGB paint colour of the vessel meshes."""
-PAINT_TEXTURE = "seahaze_vertex_paint"
-"""Mitsuba plugin name of the texture that reads :data:`PAINT_ATTRIBUTE`."""
+PAINT_TEXTURE = "seahaze_face_paint"
+"""Mitsuba plugin name of the texture of the vessels' paint (:class:`FacePaint`)."""
 PAINT_MEAN = 0.5
 """The mean colour the paint texture reports to roughplastic's sampling weight."""
 HIDDEN_DEPTH_M = 1000.0
@@ -59,7 +69,7 @@ class FleetMesh:
     faces: np.ndarray
     """(M, 3) uint32."""
     paint: np.ndarray
-    """(N, 3) float32 linear RGB per vertex."""
+    """(M, 3) float32 linear RGB paint per face."""
     face_vessel: np.ndarray
     """(M,) int32 vessel index of every face (-1 for the placeholder)."""
 
@@ -92,7 +102,7 @@ def _merge(
         z = -HIDDEN_DEPTH_M
         vertices = np.array([[x, y, z], [x + 0.01, y, z], [x, y + 0.01, z]], np.float32)
         faces = np.array([[0, 1, 2]], np.uint32)
-        paint, nobody = np.zeros((3, 3), np.float32), np.full(1, -1, np.int32)
+        paint, nobody = np.zeros((1, 3), np.float32), np.full(1, -1, np.int32)
         return FleetMesh(name, roughness, vertices, faces, paint, nobody)
     offsets = np.cumsum([0] + [len(part.vertices) for _, part in parts])
     vertices = np.concatenate([part.vertices for _, part in parts]).astype(np.float32)
@@ -100,7 +110,7 @@ def _merge(
         [part.faces.astype(np.int64) + offsets[i] for i, (_, part) in enumerate(parts)]
     ).astype(np.uint32)
     paint = np.concatenate(
-        [np.tile(np.asarray(part.rgb, np.float32), (len(part.vertices), 1)) for _, part in parts]
+        [np.tile(np.asarray(part.rgb, np.float32), (len(part.faces), 1)) for _, part in parts]
     )
     face_vessel = np.concatenate(
         [np.full(len(part.faces), index, np.int32) for index, part in parts]
@@ -126,35 +136,42 @@ def vessel_spheres(fleet: Sequence[FleetMesh], n_vessels: int) -> np.ndarray:
     return spheres
 
 
-def vessel_bsdf(roughness: float, black: bool = False) -> dict:
+def vessel_bsdf(roughness: float, paint: Any = None) -> dict:
     """Painted steel — a dielectric varnish (GGX ``alpha`` = roughness, at least
-    :data:`MIN_ALPHA`) over the per-vertex paint — or, with ``black``, a surface that reflects
-    nothing (``seahaze verify``'s black targets: painted steel of zero paint still reflects the
-    sky off its varnish)."""
-    if black:
+    :data:`MIN_ALPHA`) over the paint texture ``paint`` (a :class:`FacePaint`) — or, without
+    one, a surface that reflects nothing (``seahaze verify``'s black targets: painted steel of
+    zero paint still reflects the sky off its varnish)."""
+    if paint is None:
         return {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
-    register_paint_texture()
     return {
         "type": "roughplastic",
         "distribution": "ggx",
         "alpha": max(MIN_ALPHA, roughness),
-        "diffuse_reflectance": {"type": PAINT_TEXTURE},
+        "diffuse_reflectance": paint,
     }
 
 
-_LOADED: dict[tuple[str, float, bool], Any] = {}
-"""The vessel BSDFs of the last scene, by (variant, roughness, black): kept for the next."""
+@dataclass(frozen=True)
+class VesselMaterial:
+    """The loaded BSDF of one roughness class and its paint texture (None: black)."""
+
+    bsdf: Any
+    paint: Any
+
+
+_LOADED: dict[tuple[str, float, bool], VesselMaterial] = {}
+"""The vessel materials of the last scene, by (variant, roughness, black): kept for the next."""
 
 
 def kept_bsdf_keys() -> list[tuple[str, float, bool]]:
     """The keys (kind, roughness, black) of the vessel BSDFs kept loaded from the last scene
-    (:func:`loaded_vessel_bsdfs`)."""
+    (:func:`vessel_materials`)."""
     return list(_LOADED)
 
 
-def loaded_vessel_bsdfs(roughnesses: Sequence[float], black: bool = False) -> list[Any]:
-    """The loaded Mitsuba BSDFs of :func:`vessel_bsdf` for ``roughnesses``, the same objects
-    as the previous scene's where it had them.
+def vessel_materials(roughnesses: Sequence[float], black: bool = False) -> list[VesselMaterial]:
+    """The loaded materials of :func:`vessel_bsdf` for ``roughnesses``, the same objects as the
+    previous scene's where it had them.
 
     Loading a roughplastic tabulates its coat's transmittance (a kernel launch), the same for
     every scene (docs/benchmarks.md, "Design measurements"). Only the
@@ -168,26 +185,78 @@ def loaded_vessel_bsdfs(roughnesses: Sequence[float], black: bool = False) -> li
         del _LOADED[stale]
     for key in keys:
         if key not in _LOADED:
-            _LOADED[key] = mi.load_dict(vessel_bsdf(key[1], key[2]))
+            paint = None if black else mi.load_dict({"type": _paint_plugin()})
+            bsdf = mi.load_dict(vessel_bsdf(key[1], paint))
+            _LOADED[key] = VesselMaterial(bsdf, paint)
     return [_LOADED[key] for key in keys]
+
+
+def loaded_vessel_bsdfs(roughnesses: Sequence[float], black: bool = False) -> list[Any]:
+    """The BSDFs of :func:`vessel_materials`."""
+    return [material.bsdf for material in vessel_materials(roughnesses, black)]
+
+
+def bind_paint(
+    materials: Sequence[VesselMaterial], paints: Sequence[np.ndarray], owner: int
+) -> None:
+    """Point each material's paint texture at the per-face colours ``paints`` (one (M, 3) array
+    per material) of the scene ``owner`` (any key naming it), unless they already hold them."""
+    for material, paint in zip(materials, paints, strict=True):
+        if material.paint is not None and material.paint.owner != owner:
+            material.paint.set_faces(paint, owner)
 
 
 _REGISTERED: set[str] = set()
 
 
-def register_paint_texture() -> None:
-    """Register the ``seahaze_vertex_paint`` texture with the current Mitsuba variant (once)."""
+def _paint_plugin() -> str:
+    """Register :class:`FacePaint` with the current Mitsuba variant (once) and return its
+    plugin name."""
     import mitsuba as mi
 
     variant = mi.variant()
-    if variant in _REGISTERED:
-        return
+    if variant not in _REGISTERED:
+        mi.register_texture(PAINT_TEXTURE, lambda props: _face_paint_class()(props))
+        _REGISTERED.add(variant)
+    return PAINT_TEXTURE
 
-    class VertexPaint(mi.Texture):
-        """The shape's :data:`PAINT_ATTRIBUTE` at the hit, linear RGB."""
+
+def _face_paint_class() -> type:
+    """:class:`FacePaint` for the current variant (it derives from the variant's Texture)."""
+    import mitsuba as mi
+
+    variant = mi.variant()
+    if variant not in _FACE_PAINT:
+        _FACE_PAINT[variant] = _make_face_paint(mi)
+    return _FACE_PAINT[variant]
+
+
+_FACE_PAINT: dict[str, type] = {}
+
+
+def _make_face_paint(mi: Any) -> type:
+    import drjit as dr
+
+    class FacePaint(mi.Texture):
+        """The paint of the hit's face, linear RGB: a gather from the texture's own array of
+        per-face colours (no call to the shape, so every class's BSDF traces alike)."""
+
+        def __init__(self, props: Any) -> None:
+            super().__init__(props)
+            self.owner: int | None = None
+            self.set_faces(np.zeros((1, 3), np.float32), None)
+
+        def set_faces(self, rgb: np.ndarray, owner: int | None) -> None:
+            """The colours (M, 3) of the mesh's faces, of scene ``owner``."""
+            rgb = np.asarray(rgb, np.float32).reshape(-1, 3)
+            # At least two faces: a one-element array would be a scalar, another kernel.
+            padded = np.concatenate([rgb, np.zeros((2, 3), np.float32)])
+            self.channels = [mi.Float(np.ascontiguousarray(padded[:, c])) for c in range(3)]
+            self.owner = owner
 
         def eval(self, si: Any, active: Any = True) -> Any:
-            return si.shape.eval_attribute_3(PAINT_ATTRIBUTE, si, active)
+            face = si.prim_index
+            return mi.Color3f(*(dr.gather(mi.Float, c, face, active) for c in self.channels))
 
         def eval_1(self, si: Any, active: Any = True) -> Any:
             rgb = self.eval(si, active)
@@ -197,7 +266,6 @@ def register_paint_texture() -> None:
             return PAINT_MEAN
 
         def to_string(self) -> str:
-            return "VertexPaint[]"
+            return "FacePaint[]"
 
-    mi.register_texture(PAINT_TEXTURE, lambda props: VertexPaint(props))
-    _REGISTERED.add(variant)
+    return FacePaint

@@ -164,6 +164,7 @@ def render_radiance(
     values (a correction, not a radiance); ``stratified`` draws from seahaze's multi-jittered
     sampler (:func:`seahaze.render.wavefront.render_film`; Python integrators only)."""
     scene = loaded.clean_scene if clean and loaded.clean_scene is not None else loaded.scene
+    loaded.bind_paint()
     if not loaded.has_haze_box and sensor_index == 0:
         spp = stratified_spp(spp)  # the physical scene's multijitter sampler: no rounding up
     integrator = integrator if integrator is not None else scene.integrator()

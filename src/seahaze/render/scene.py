@@ -23,6 +23,7 @@ alone, :func:`water_bsdf_dict` with :attr:`LoadedScene.sea_roughness`.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -43,7 +44,7 @@ from ..world import (
     MeshData,
     SceneGeometry,
 )
-from .fleet import PAINT_ATTRIBUTE, fleet_meshes, loaded_vessel_bsdfs, vessel_spheres
+from .fleet import VesselMaterial, bind_paint, fleet_meshes, vessel_materials, vessel_spheres
 from .sky import sky_dict
 
 SEA_SHAPE = -1
@@ -205,6 +206,10 @@ def stratified_spp(spp: int) -> int:
     return 1
 
 
+_SCENE_COUNT = itertools.count()
+"""Keys of the scenes a process builds (:attr:`LoadedScene.paint_owner`)."""
+
+
 @dataclass
 class LoadedScene:
     """A Mitsuba scene plus the handles the render passes need."""
@@ -240,6 +245,20 @@ class LoadedScene:
     clean_scene: Any = None
     """The same surfaces, sun and sky without the haze box, for the clean pass (None: ``scene``
     has no box and serves)."""
+    vessel_materials: list[VesselMaterial] = field(default_factory=list)
+    """The vessel meshes' BSDFs and paint textures, shared with other scenes (render/fleet.py)."""
+    vessel_paint: list[np.ndarray] = field(default_factory=list)
+    """This scene's paint of each vessel mesh, (M, 3) linear RGB per face."""
+    paint_owner: int = field(default_factory=lambda: next(_SCENE_COUNT))
+    """This scene's key among the scenes a process builds (bind_paint)."""
+
+    def __post_init__(self) -> None:
+        self.bind_paint()
+
+    def bind_paint(self) -> None:
+        """Point the shared paint textures at this scene's vessels' paint (if another scene
+        was bound since): every render of the scene does it first (render/fleet.py)."""
+        bind_paint(self.vessel_materials, self.vessel_paint, self.paint_owner)
 
     @property
     def has_haze_box(self) -> bool:
@@ -379,11 +398,10 @@ def build_scene(
     # and the ids of every scene's BSDFs (which its kernel is traced over) are those of a
     # fresh process rendering that scene alone.
     fleet = fleet_meshes(geometry.vessels, (camera.x_m, camera.y_m))
-    bsdfs = loaded_vessel_bsdfs([part.roughness for part in fleet], black_vessels)
+    materials = vessel_materials([part.roughness for part in fleet], black_vessels)
     surfaces = {"sea": _sea_mesh(geometry.sea, sea_surface_bsdf(spec, geometry))}
-    for part, bsdf in zip(fleet, bsdfs, strict=True):
-        paint = {PAINT_ATTRIBUTE: part.paint}
-        surfaces[part.name] = _mesh(part.name, part.vertices, part.faces, bsdf, paint)
+    for part, material in zip(fleet, materials, strict=True):
+        surfaces[part.name] = _mesh(part.name, part.vertices, part.faces, material.bsdf, {})
     scene.update(surfaces)
     clean_scene = None
     if haze_box:
@@ -418,4 +436,6 @@ def build_scene(
         sea_roughness=geometry.sea_roughness,
         sea_foam_coverage=geometry.sea_foam_coverage,
         clean_scene=clean_scene,
+        vessel_materials=materials,
+        vessel_paint=[part.paint for part in fleet],
     )
