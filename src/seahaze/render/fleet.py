@@ -12,10 +12,11 @@ How
     Every vessel part joins one mesh per roughness class (:data:`ROUGHNESS_CLASSES`: every
     built-in material's roughness, so built-in vessels are unchanged; a user mesh's roughness
     goes to the nearest class). The part's paint colour becomes a colour per face, read by the
-    ``seahaze_face_paint`` texture (:class:`FacePaint`) from an array the texture holds. A class
-    no vessel uses holds one small triangle far under the sea, which no ray reaches. Each mesh
-    records which vessel every face belongs to (:attr:`FleetMesh.face_vessel`), so the geometry
-    pass tells the vessels apart by the hit's primitive index.
+    paint texture (:class:`seahaze.render.mesh_textures.FacePaint`) from an array it holds. A
+    class no vessel uses holds one small triangle far under the sea, which no ray reaches. Each
+    mesh
+    records which vessel every face belongs to (:attr:`FleetMesh.face_vessel`), so the
+    geometry pass tells the vessels apart by the hit's primitive index.
 
     drjit traces a BSDF virtual call once per BSDF; identical traces are compiled once. A paint
     read from the mesh (a per-vertex attribute) was a virtual call to the shape nested inside
@@ -30,9 +31,9 @@ How
     own first (:meth:`seahaze.render.scene.LoadedScene.bind_paint`).
 
     roughplastic asks its diffuse texture for a mean colour once, to weigh sampling its
-    specular coat against its diffuse base; the paint texture answers :data:`PAINT_MEAN` for
-    every scene. The weight only steers sampling (the estimate stays unbiased); a fixed value
-    keeps it out of the kernel.
+    specular coat against its diffuse base; the paint texture answers
+    :data:`~seahaze.render.mesh_textures.PAINT_MEAN` for every scene. The weight only steers
+    sampling (the estimate stays unbiased); a fixed value keeps it out of the kernel.
 """
 
 from __future__ import annotations
@@ -44,14 +45,11 @@ from typing import Any
 import numpy as np
 
 from ..world import MeshData, VesselInstance
+from .mesh_textures import face_paint
 
 ROUGHNESS_CLASSES = (0.15, 0.3, 0.35, 0.4, 0.45, 0.5, 0.6, 0.65, 0.7, 0.8, 0.85)
 """Roughness of the vessel meshes: every roughness of the built-in vessels' materials
 (:mod:`seahaze.vessels`; a test keeps the two in step)."""
-PAINT_TEXTURE = "seahaze_face_paint"
-"""Mitsuba plugin name of the texture of the vessels' paint (:class:`FacePaint`)."""
-PAINT_MEAN = 0.5
-"""The mean colour the paint texture reports to roughplastic's sampling weight."""
 HIDDEN_DEPTH_M = 1000.0
 """Depth (m) under the sea of the placeholder triangle of an unused class."""
 MIN_ALPHA = 0.05
@@ -138,7 +136,8 @@ def vessel_spheres(fleet: Sequence[FleetMesh], n_vessels: int) -> np.ndarray:
 
 def vessel_bsdf(roughness: float, paint: Any = None) -> dict:
     """Painted steel — a dielectric varnish (GGX ``alpha`` = roughness, at least
-    :data:`MIN_ALPHA`) over the paint texture ``paint`` (a :class:`FacePaint`) — or, without
+    :data:`MIN_ALPHA`) over the paint texture ``paint`` (a
+    :class:`~seahaze.render.mesh_textures.FacePaint`) — or, without
     one, a surface that reflects nothing (``seahaze verify``'s black targets: painted steel of
     zero paint still reflects the sky off its varnish)."""
     if paint is None:
@@ -185,7 +184,7 @@ def vessel_materials(roughnesses: Sequence[float], black: bool = False) -> list[
         del _LOADED[stale]
     for key in keys:
         if key not in _LOADED:
-            paint = None if black else mi.load_dict({"type": _paint_plugin()})
+            paint = None if black else face_paint()
             bsdf = mi.load_dict(vessel_bsdf(key[1], paint))
             _LOADED[key] = VesselMaterial(bsdf, paint)
     return [_LOADED[key] for key in keys]
@@ -204,68 +203,3 @@ def bind_paint(
     for material, paint in zip(materials, paints, strict=True):
         if material.paint is not None and material.paint.owner != owner:
             material.paint.set_faces(paint, owner)
-
-
-_REGISTERED: set[str] = set()
-
-
-def _paint_plugin() -> str:
-    """Register :class:`FacePaint` with the current Mitsuba variant (once) and return its
-    plugin name."""
-    import mitsuba as mi
-
-    variant = mi.variant()
-    if variant not in _REGISTERED:
-        mi.register_texture(PAINT_TEXTURE, lambda props: _face_paint_class()(props))
-        _REGISTERED.add(variant)
-    return PAINT_TEXTURE
-
-
-def _face_paint_class() -> type:
-    """:class:`FacePaint` for the current variant (it derives from the variant's Texture)."""
-    import mitsuba as mi
-
-    variant = mi.variant()
-    if variant not in _FACE_PAINT:
-        _FACE_PAINT[variant] = _make_face_paint(mi)
-    return _FACE_PAINT[variant]
-
-
-_FACE_PAINT: dict[str, type] = {}
-
-
-def _make_face_paint(mi: Any) -> type:
-    import drjit as dr
-
-    class FacePaint(mi.Texture):
-        """The paint of the hit's face, linear RGB: a gather from the texture's own array of
-        per-face colours (no call to the shape, so every class's BSDF traces alike)."""
-
-        def __init__(self, props: Any) -> None:
-            super().__init__(props)
-            self.owner: int | None = None
-            self.set_faces(np.zeros((1, 3), np.float32), None)
-
-        def set_faces(self, rgb: np.ndarray, owner: int | None) -> None:
-            """The colours (M, 3) of the mesh's faces, of scene ``owner``."""
-            rgb = np.asarray(rgb, np.float32).reshape(-1, 3)
-            # At least two faces: a one-element array would be a scalar, another kernel.
-            padded = np.concatenate([rgb, np.zeros((2, 3), np.float32)])
-            self.channels = [mi.Float(np.ascontiguousarray(padded[:, c])) for c in range(3)]
-            self.owner = owner
-
-        def eval(self, si: Any, active: Any = True) -> Any:
-            face = si.prim_index
-            return mi.Color3f(*(dr.gather(mi.Float, c, face, active) for c in self.channels))
-
-        def eval_1(self, si: Any, active: Any = True) -> Any:
-            rgb = self.eval(si, active)
-            return (rgb.x + rgb.y + rgb.z) / 3.0
-
-        def mean(self) -> float:
-            return PAINT_MEAN
-
-        def to_string(self) -> str:
-            return "FacePaint[]"
-
-    return FacePaint

@@ -12,13 +12,14 @@ extra random numbers, so a clean pass through an empty box would change its nois
 ``haze.top_m``, the levels (the box width) and whether the camera is inside the layer. The
 ``physical`` mode computes the haze itself and loads the scene without the box.
 
-The sea's BSDF (:func:`sea_surface_bsdf`) blends, by the sea mesh's per-vertex attributes,
-a far and a near water lobe (``blendbsdf`` weighted by ``vertex_near_roughness``: each vertex's
-slope budget, docs/ocean.md) and then the water with a Lambertian foam whose reflectance is
-``vertex_foam_reflectance`` (weighted by ``vertex_foam``). Where no shape is attached to a
+The sea's BSDF (:func:`sea_surface_bsdf`) blends, by the sea mesh's per-vertex values, a far
+and a near water lobe (``blendbsdf`` weighted by the near-roughness weight: each vertex's slope
+budget, docs/ocean.md) and then the water with a Lambertian foam whose reflectance is the
+vertex's foam reflectance (weighted by its foam fraction); the values are read by
+:mod:`seahaze.render.mesh_textures` textures of the sea mesh. Where no shape is attached to a
 surface interaction (a BSDF sampled with a bare ``SurfaceInteraction3f``, as the ``physical``
-mode's photon table does) the attribute textures evaluate to 0 and the blend is the far water
-alone, :func:`water_bsdf_dict` with :attr:`LoadedScene.sea_roughness`.
+mode's photon table does) the textures evaluate to 0 and the blend is the far water alone,
+:func:`water_bsdf_dict` with :attr:`LoadedScene.sea_roughness`.
 """
 
 from __future__ import annotations
@@ -45,6 +46,7 @@ from ..world import (
     SceneGeometry,
 )
 from .fleet import VesselMaterial, bind_paint, fleet_meshes, vessel_materials, vessel_spheres
+from .mesh_textures import vertex_values
 from .sky import sky_dict
 
 SEA_SHAPE = -1
@@ -123,22 +125,14 @@ def sensor_dict(
     return sensor
 
 
-def _mesh(
-    name: str,
-    vertices: np.ndarray,
-    faces: np.ndarray,
-    bsdf: Any,
-    attributes: dict[str, np.ndarray],
-) -> Any:
+def _mesh(name: str, vertices: np.ndarray, faces: np.ndarray, bsdf: Any) -> Any:
     """A Mitsuba mesh built straight from numpy arrays (no files) with the loaded BSDF
-    ``bsdf``; ``attributes`` maps a ``vertex_*`` name to (N,) or (N, C) float32 values."""
+    ``bsdf``. Its per-vertex and per-face values live in the BSDF's textures
+    (:mod:`seahaze.render.mesh_textures`), not in mesh attributes."""
     mi = _mi()
     props = mi.Properties()
     props["bsdf"] = bsdf
     m = mi.Mesh(name, vertex_count=len(vertices), face_count=len(faces), props=props)
-    for key, values in attributes.items():
-        values = np.ascontiguousarray(values, dtype=np.float32)
-        m.add_attribute(key, 1 if values.ndim == 1 else values.shape[1], values.ravel())
     params = mi.traverse(m)
     params["vertex_positions"] = np.ascontiguousarray(vertices, dtype=np.float32).ravel()
     params["faces"] = np.ascontiguousarray(faces, dtype=np.uint32).ravel()
@@ -147,8 +141,7 @@ def _mesh(
 
 
 def _sea_mesh(sea: MeshData, bsdf: dict) -> Any:
-    attributes = {f"vertex_{name}": values for name, values in sea.attributes.items()}
-    return _mesh(sea.name, sea.vertices, sea.faces, _mi().load_dict(bsdf), attributes)
+    return _mesh(sea.name, sea.vertices, sea.faces, _mi().load_dict(bsdf))
 
 
 def water_bsdf_dict(spec: SceneSpec, roughness: float) -> dict:
@@ -169,14 +162,17 @@ def water_bsdf_dict(spec: SceneSpec, roughness: float) -> dict:
 
 def sea_surface_bsdf(spec: SceneSpec, geometry: SceneGeometry) -> dict:
     """The sea shape's BSDF: water of :func:`water_bsdf_dict`, its near and far roughness lobes
-    mixed per vertex, under foam where the sea mesh has some (module docstring)."""
-    attributes = geometry.sea.attributes
+    mixed per vertex, under foam where the sea mesh has some (module docstring). The per-vertex
+    weights are read by :func:`~seahaze.render.mesh_textures.vertex_values` textures of the sea
+    mesh, not Mitsuba's ``mesh_attribute`` (a virtual call to the shape inside the BSDF's)."""
+    sea = geometry.sea
+    attributes = sea.attributes
     water = water_bsdf_dict(spec, geometry.sea_roughness)
     near = geometry.sea_roughness_near
     if near is not None and SEA_NEAR_ROUGHNESS in attributes:
         water = {
             "type": "blendbsdf",
-            "weight": {"type": "mesh_attribute", "name": f"vertex_{SEA_NEAR_ROUGHNESS}"},
+            "weight": vertex_values(sea.faces, attributes[SEA_NEAR_ROUGHNESS]),
             "bsdf_0": water,
             "bsdf_1": water_bsdf_dict(spec, near),
         }
@@ -184,11 +180,11 @@ def sea_surface_bsdf(spec: SceneSpec, geometry: SceneGeometry) -> dict:
         return water
     foam = {
         "type": "diffuse",
-        "reflectance": {"type": "mesh_attribute", "name": f"vertex_{SEA_FOAM_REFLECTANCE}"},
+        "reflectance": vertex_values(sea.faces, attributes[SEA_FOAM_REFLECTANCE]),
     }
     return {
         "type": "blendbsdf",
-        "weight": {"type": "mesh_attribute", "name": f"vertex_{SEA_FOAM}"},
+        "weight": vertex_values(sea.faces, attributes[SEA_FOAM]),
         "bsdf_0": water,
         "bsdf_1": foam,
     }
@@ -401,7 +397,7 @@ def build_scene(
     materials = vessel_materials([part.roughness for part in fleet], black_vessels)
     surfaces = {"sea": _sea_mesh(geometry.sea, sea_surface_bsdf(spec, geometry))}
     for part, material in zip(fleet, materials, strict=True):
-        surfaces[part.name] = _mesh(part.name, part.vertices, part.faces, material.bsdf, {})
+        surfaces[part.name] = _mesh(part.name, part.vertices, part.faces, material.bsdf)
     scene.update(surfaces)
     clean_scene = None
     if haze_box:

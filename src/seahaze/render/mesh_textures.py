@@ -1,0 +1,138 @@
+"""Textures that read one mesh's own values by index, with no virtual call to the shape.
+
+Mitsuba's ``mesh_attribute`` texture asks the hit's shape for its attribute: a virtual call over
+every shape of the scene, nested inside the BSDF's own virtual call. drjit traces a nested call
+with its dispatch table at a place of its own in each trace, so BSDFs that differ only in their
+values no longer trace alike and are compiled once per BSDF at every BSDF call of a kernel;
+and every nested call adds its dispatch over all the scene's shapes (docs/benchmarks.md, "What
+does a new image size or sample count compile?"). These textures hold the values of the one
+mesh they are attached to and gather them at the hit's face:
+
+* :class:`VertexValues` — a per-vertex scalar (the sea's foam, foam reflectance and near-lobe
+  weight), interpolated over the hit's triangle with its barycentric coordinates as Mitsuba's
+  meshes do (``(1 − b₁ − b₂)·v₀ + b₁·v₁ + b₂·v₂``, with ``(b₁, b₂)`` the interaction's ``uv`` on
+  a mesh without texture coordinates);
+* :class:`FacePaint` — a colour per face (the vessels' paint, constant over each part).
+
+An interaction with no shape (a BSDF sampled on its own, as :mod:`.photon_sources` does) reads
+0, as ``mesh_attribute`` does. The classes derive from the active variant's ``Texture``:
+:func:`vertex_values` and :func:`face_paint` build them for it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+VERTEX_VALUES = "seahaze_vertex_values"
+"""Mitsuba plugin name of :class:`VertexValues`."""
+FACE_PAINT = "seahaze_face_paint"
+"""Mitsuba plugin name of :class:`FacePaint`."""
+PAINT_MEAN = 0.5
+"""The mean colour :class:`FacePaint` reports (roughplastic weighs its sampling by it once):
+a fixed value keeps the scene's paint out of the kernel; it only steers sampling."""
+
+_CLASSES: dict[str, dict[str, type]] = {}
+"""Per variant: plugin name → class."""
+
+
+def vertex_values(faces: np.ndarray, values: np.ndarray) -> Any:
+    """A loaded :class:`VertexValues` of a mesh with ``faces`` (M, 3) and per-vertex
+    ``values`` (N,)."""
+    import mitsuba as mi
+
+    texture = mi.load_dict({"type": _registered(VERTEX_VALUES)})
+    texture.set_mesh(faces, values)
+    return texture
+
+
+def face_paint() -> Any:
+    """A loaded :class:`FacePaint` holding no paint yet (:meth:`FacePaint.set_faces`)."""
+    import mitsuba as mi
+
+    return mi.load_dict({"type": _registered(FACE_PAINT)})
+
+
+def _registered(name: str) -> str:
+    """Register this module's textures with the active variant (once); returns ``name``."""
+    import mitsuba as mi
+
+    variant = mi.variant()
+    if variant not in _CLASSES:
+        classes = _make_classes(mi)
+        for plugin, cls in classes.items():
+            mi.register_texture(plugin, lambda props, cls=cls: cls(props))
+        _CLASSES[variant] = classes
+    return name
+
+
+def _owned(values: np.ndarray, kind: Any) -> Any:
+    """``values`` as a drjit array of ``kind``, padded to at least two elements (a
+    one-element array would be a scalar, another kernel)."""
+    flat = np.ascontiguousarray(np.ravel(values))
+    padded = np.concatenate([flat, np.zeros(2, flat.dtype)])
+    return kind(padded)
+
+
+def _make_classes(mi: Any) -> dict[str, type]:
+    import drjit as dr
+
+    def has_shape(si: Any, active: Any) -> Any:
+        return active & (dr.reinterpret_array(mi.UInt32, si.shape) != 0)
+
+    class VertexValues(mi.Texture):
+        """A per-vertex scalar of one mesh at the hit, interpolated (module docstring)."""
+
+        def set_mesh(self, faces: np.ndarray, values: np.ndarray) -> None:
+            """The mesh's ``faces`` (M, 3) vertex indices and ``values`` (N,) per vertex."""
+            self.faces = _owned(np.asarray(faces, np.uint32), mi.UInt32)
+            self.values = _owned(np.asarray(values, np.float32), mi.Float)
+            self.mean_value = float(np.mean(values)) if len(values) else 0.0
+
+        def eval_1(self, si: Any, active: Any = True) -> Any:
+            valid = has_shape(si, active)
+            first = si.prim_index * 3
+            corners = [dr.gather(mi.UInt32, self.faces, first + k, valid) for k in range(3)]
+            v0, v1, v2 = (dr.gather(mi.Float, self.values, i, valid) for i in corners)
+            b1, b2 = si.uv.x, si.uv.y
+            return dr.select(valid, (1.0 - b1 - b2) * v0 + b1 * v1 + b2 * v2, 0.0)
+
+        def eval(self, si: Any, active: Any = True) -> Any:
+            return mi.Color3f(self.eval_1(si, active))
+
+        def mean(self) -> float:
+            return self.mean_value
+
+        def to_string(self) -> str:
+            return "VertexValues[]"
+
+    class FacePaint(mi.Texture):
+        """The paint of the hit's face, linear RGB (module docstring)."""
+
+        def __init__(self, props: Any) -> None:
+            super().__init__(props)
+            self.set_faces(np.zeros((1, 3), np.float32), None)
+
+        def set_faces(self, rgb: np.ndarray, owner: int | None) -> None:
+            """The colours (M, 3) of the mesh's faces, of the scene keyed ``owner``."""
+            rgb = np.asarray(rgb, np.float32).reshape(-1, 3)
+            self.channels = [_owned(rgb[:, c], mi.Float) for c in range(3)]
+            self.owner = owner
+
+        def eval(self, si: Any, active: Any = True) -> Any:
+            valid = has_shape(si, active)
+            face = si.prim_index
+            return mi.Color3f(*(dr.gather(mi.Float, c, face, valid) for c in self.channels))
+
+        def eval_1(self, si: Any, active: Any = True) -> Any:
+            rgb = self.eval(si, active)
+            return (rgb.x + rgb.y + rgb.z) / 3.0
+
+        def mean(self) -> float:
+            return PAINT_MEAN
+
+        def to_string(self) -> str:
+            return "FacePaint[]"
+
+    return {VERTEX_VALUES: VertexValues, FACE_PAINT: FacePaint}
