@@ -224,6 +224,36 @@ def test_haze_in_front_of_a_vessel_sees_the_vessel() -> None:
     assert np.all(open_sea - ref > 0.06 * ref + 3.0 * np.hypot(ref_se, open_sea_se))
 
 
+def test_camera_points_change_the_draws_not_the_mean_nor_the_kernel() -> None:
+    """The camera segment's in-scattering points are a loop of their own whose count is a
+    kernel parameter: one point and four give the same level within their noise, different
+    numbers for the same seed, and the second count launches no large kernel of its own."""
+    import drjit as dr
+
+    spec, loaded = _box_toward_the_sun("physical")
+    sigma = channel_extinction(BOX_VISIBILITY, "koschmieder", "grey")
+    levels: dict[int, list[np.ndarray]] = {}
+    for points in (1, 4):
+        settings = EstimatorSettings(camera_points=points, vessel_light_share=0.0)
+        renderer = physical.PhysicalRenderer(loaded, spec, settings)
+        if points == 4:
+            dr.set_flag(dr.JitFlag.KernelHistory, True)
+            dr.kernel_history()  # clear
+        try:
+            levels[points] = [
+                renderer.render([sigma], 0.998, 0.75, 16, seed).levels[0] for seed in range(6)
+            ]
+            history = dr.kernel_history() if points == 4 else []
+        finally:
+            dr.set_flag(dr.JitFlag.KernelHistory, False)
+    one, four = (np.array([image.mean() for image in levels[n]]) for n in (1, 4))
+    error = np.hypot(one.std(ddof=1), four.std(ddof=1)) / np.sqrt(len(one))
+    assert abs(one.mean() - four.mean()) <= 4.0 * error, (one.mean(), four.mean(), error)
+    assert not np.array_equal(levels[1][0], levels[4][0])
+    large = [k for k in history if k.get("operation_count", 0) > 5000]
+    assert large and all(k.get("cache_hit") for k in large)
+
+
 def test_aiming_at_the_vessels_keeps_the_vessel_light_and_cuts_its_noise() -> None:
     # The pass's probe points drawn near the box and its directions aimed at it (MIS against
     # the levels' mixture and the phase function) estimate the same correction as points
