@@ -186,15 +186,17 @@ def test_a_scene_with_another_sun_sea_and_fleet_compiles_no_kernel_of_its_own() 
     assert launched[1] <= launched[0]
 
 
+@pytest.mark.usefixtures("mitsuba_variant")
 def test_vessel_bsdfs_are_loaded_once_and_only_the_last_set_is_kept() -> None:
     pytest.importorskip("mitsuba")
     from seahaze.render import fleet
 
-    first = fleet.loaded_vessel_bsdfs(ROUGHNESS_CLASSES)
-    again = fleet.loaded_vessel_bsdfs(ROUGHNESS_CLASSES)
-    assert all(a is b for a, b in zip(first, again, strict=True))
-    black = fleet.loaded_vessel_bsdfs(ROUGHNESS_CLASSES, black=True)
-    assert not any(a is b for a, b in zip(first, black, strict=True))
+    first = fleet.vessel_materials(ROUGHNESS_CLASSES)
+    again = fleet.vessel_materials(ROUGHNESS_CLASSES)
+    assert all(a.bsdf is b.bsdf and a.paint is b.paint for a, b in zip(first, again, strict=True))
+    black = fleet.vessel_materials(ROUGHNESS_CLASSES, black=True)
+    assert not any(a.bsdf is b.bsdf for a, b in zip(first, black, strict=True))
+    assert all(m.paint is None for m in black)  # black: nothing painted
     # The painted set was dropped: drjit would trace every live BSDF into the black scene's
     # kernel otherwise.
     assert len(fleet.kept_bsdf_keys()) == len(ROUGHNESS_CLASSES)

@@ -190,11 +190,6 @@ def vessel_materials(roughnesses: Sequence[float], black: bool = False) -> list[
     return [_LOADED[key] for key in keys]
 
 
-def loaded_vessel_bsdfs(roughnesses: Sequence[float], black: bool = False) -> list[Any]:
-    """The BSDFs of :func:`vessel_materials`."""
-    return [material.bsdf for material in vessel_materials(roughnesses, black)]
-
-
 def bind_paint(
     materials: Sequence[VesselMaterial], paints: Sequence[np.ndarray], owner: int
 ) -> None:
