@@ -35,12 +35,12 @@ def test_vertex_values_equal_mitsubas_interpolated_attribute() -> None:
     import drjit as dr
     import mitsuba as mi
 
-    from seahaze.render.mesh_textures import vertex_values
+    from seahaze.render.mesh_textures import vertex_textures
 
     rng = np.random.default_rng(4)
     values = rng.random(9).astype(np.float32)
     scene, mesh, faces = _grid_mesh(values)
-    texture = vertex_values(faces, values)
+    texture = vertex_textures(faces, {"v": values})["v"]
     xy = rng.random((500, 2)) * 1.98 + 0.01
     ray = mi.Ray3f(mi.Point3f(xy[:, 0], xy[:, 1], 1.0), mi.Vector3f(0.0, 0.0, -1.0))
     si = scene.ray_intersect(ray)
@@ -57,12 +57,13 @@ def test_textures_read_zero_where_no_shape_is_attached() -> None:
     import drjit as dr
     import mitsuba as mi
 
-    from seahaze.render.mesh_textures import face_paint, vertex_values
+    from seahaze.render.mesh_textures import face_paint, vertex_textures
 
     values = np.full(9, 0.7, np.float32)
     _, _, faces = _grid_mesh(values)
     bare = dr.zeros(mi.SurfaceInteraction3f, 4)
-    assert np.all(np.array(vertex_values(faces, values).eval_1(bare)) == 0.0)
+    texture = vertex_textures(faces, {"v": values})["v"]
+    assert np.all(np.array(texture.eval_1(bare)) == 0.0)
     paint = face_paint()
     paint.set_faces(np.full((len(faces), 3), 0.4, np.float32), owner=1)
     assert np.all(np.array(paint.eval(bare).x) == 0.0)

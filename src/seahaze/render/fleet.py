@@ -14,8 +14,7 @@ How
     goes to the nearest class). The part's paint colour becomes a colour per face, read by the
     paint texture (:class:`seahaze.render.mesh_textures.FacePaint`) from an array it holds. A
     class no vessel uses holds one small triangle far under the sea, which no ray reaches. Each
-    mesh
-    records which vessel every face belongs to (:attr:`FleetMesh.face_vessel`), so the
+    mesh records which vessel every face belongs to (:attr:`FleetMesh.face_vessel`), so the
     geometry pass tells the vessels apart by the hit's primitive index.
 
     drjit traces a BSDF virtual call once per BSDF; identical traces are compiled once. A paint

@@ -11,12 +11,14 @@ mesh they are attached to and gather them at the hit's face:
 * :class:`VertexValues` — a per-vertex scalar (the sea's foam, foam reflectance and near-lobe
   weight), interpolated over the hit's triangle with its barycentric coordinates as Mitsuba's
   meshes do (``(1 − b₁ − b₂)·v₀ + b₁·v₁ + b₂·v₂``, with ``(b₁, b₂)`` the interaction's ``uv`` on
-  a mesh without texture coordinates);
+  a mesh without texture coordinates); the textures of one mesh share one copy of its faces;
 * :class:`FacePaint` — a colour per face (the vessels' paint, constant over each part).
 
 An interaction with no shape (a BSDF sampled on its own, as :mod:`.photon_sources` does) reads
 0, as ``mesh_attribute`` does. The classes derive from the active variant's ``Texture``:
-:func:`vertex_values` and :func:`face_paint` build them for it.
+:func:`vertex_textures` and :func:`face_paint` build them for it. Their arrays live in drjit's own
+memory (:func:`seahaze.render.jit_haze.owned_floats`), so a kernel's hash does not follow
+numpy's buffers from scene to scene.
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+
+from .jit_haze import owned_floats, owned_indices
 
 VERTEX_VALUES = "seahaze_vertex_values"
 """Mitsuba plugin name of :class:`VertexValues`."""
@@ -37,14 +41,19 @@ _CLASSES: dict[str, dict[str, type]] = {}
 """Per variant: plugin name → class."""
 
 
-def vertex_values(faces: np.ndarray, values: np.ndarray) -> Any:
-    """A loaded :class:`VertexValues` of a mesh with ``faces`` (M, 3) and per-vertex
-    ``values`` (N,)."""
+def vertex_textures(faces: np.ndarray, values: dict[str, np.ndarray]) -> dict[str, Any]:
+    """A loaded :class:`VertexValues` per entry of ``values`` ((N,) per vertex) of a mesh with
+    ``faces`` (M, 3), all reading one copy of the faces: the same gathers, which drjit's value
+    numbering can merge where a BSDF reads several of them at one hit."""
     import mitsuba as mi
 
-    texture = mi.load_dict({"type": _registered(VERTEX_VALUES)})
-    texture.set_mesh(faces, values)
-    return texture
+    shared = owned_indices(_padded(np.asarray(faces, np.uint32)))
+    textures = {}
+    for name, per_vertex in values.items():
+        texture = mi.load_dict({"type": _registered(VERTEX_VALUES)})
+        texture.set_mesh(shared, per_vertex)
+        textures[name] = texture
+    return textures
 
 
 def face_paint() -> Any:
@@ -67,12 +76,11 @@ def _registered(name: str) -> str:
     return name
 
 
-def _owned(values: np.ndarray, kind: Any) -> Any:
-    """``values`` as a drjit array of ``kind``, padded to at least two elements (a
-    one-element array would be a scalar, another kernel)."""
+def _padded(values: np.ndarray) -> np.ndarray:
+    """``values`` flattened with two trailing zeros: an array a gather reads stays an array
+    even for a one-face mesh (a one-element array would be a scalar, another kernel)."""
     flat = np.ascontiguousarray(np.ravel(values))
-    padded = np.concatenate([flat, np.zeros(2, flat.dtype)])
-    return kind(padded)
+    return np.concatenate([flat, np.zeros(2, flat.dtype)])
 
 
 def _make_classes(mi: Any) -> dict[str, type]:
@@ -84,10 +92,11 @@ def _make_classes(mi: Any) -> dict[str, type]:
     class VertexValues(mi.Texture):
         """A per-vertex scalar of one mesh at the hit, interpolated (module docstring)."""
 
-        def set_mesh(self, faces: np.ndarray, values: np.ndarray) -> None:
-            """The mesh's ``faces`` (M, 3) vertex indices and ``values`` (N,) per vertex."""
-            self.faces = _owned(np.asarray(faces, np.uint32), mi.UInt32)
-            self.values = _owned(np.asarray(values, np.float32), mi.Float)
+        def set_mesh(self, faces: Any, values: np.ndarray) -> None:
+            """The mesh's vertex indices ``faces`` (a drjit UInt32 array, three per face, as
+            :func:`vertex_textures` uploads them) and ``values`` (N,) per vertex."""
+            self.faces = faces
+            self.values = owned_floats(_padded(values))
             self.mean_value = float(np.mean(values)) if len(values) else 0.0
 
         def eval_1(self, si: Any, active: Any = True) -> Any:
@@ -117,7 +126,7 @@ def _make_classes(mi: Any) -> dict[str, type]:
         def set_faces(self, rgb: np.ndarray, owner: int | None) -> None:
             """The colours (M, 3) of the mesh's faces, of the scene keyed ``owner``."""
             rgb = np.asarray(rgb, np.float32).reshape(-1, 3)
-            self.channels = [_owned(rgb[:, c], mi.Float) for c in range(3)]
+            self.channels = [owned_floats(_padded(rgb[:, c])) for c in range(3)]
             self.owner = owner
 
         def eval(self, si: Any, active: Any = True) -> Any:

@@ -46,7 +46,7 @@ from ..world import (
     SceneGeometry,
 )
 from .fleet import VesselMaterial, bind_paint, fleet_meshes, vessel_materials, vessel_spheres
-from .mesh_textures import vertex_values
+from .mesh_textures import vertex_textures
 from .sky import sky_dict
 
 SEA_SHAPE = -1
@@ -163,28 +163,25 @@ def water_bsdf_dict(spec: SceneSpec, roughness: float) -> dict:
 def sea_surface_bsdf(spec: SceneSpec, geometry: SceneGeometry) -> dict:
     """The sea shape's BSDF: water of :func:`water_bsdf_dict`, its near and far roughness lobes
     mixed per vertex, under foam where the sea mesh has some (module docstring). The per-vertex
-    weights are read by :func:`~seahaze.render.mesh_textures.vertex_values` textures of the sea
+    weights are read by :func:`~seahaze.render.mesh_textures.vertex_textures` textures of the sea
     mesh, not Mitsuba's ``mesh_attribute`` (a virtual call to the shape inside the BSDF's)."""
     sea = geometry.sea
-    attributes = sea.attributes
+    weights = vertex_textures(sea.faces, sea.attributes)
     water = water_bsdf_dict(spec, geometry.sea_roughness)
     near = geometry.sea_roughness_near
-    if near is not None and SEA_NEAR_ROUGHNESS in attributes:
+    if near is not None and SEA_NEAR_ROUGHNESS in weights:
         water = {
             "type": "blendbsdf",
-            "weight": vertex_values(sea.faces, attributes[SEA_NEAR_ROUGHNESS]),
+            "weight": weights[SEA_NEAR_ROUGHNESS],
             "bsdf_0": water,
             "bsdf_1": water_bsdf_dict(spec, near),
         }
-    if SEA_FOAM not in attributes:
+    if SEA_FOAM not in weights:
         return water
-    foam = {
-        "type": "diffuse",
-        "reflectance": vertex_values(sea.faces, attributes[SEA_FOAM_REFLECTANCE]),
-    }
+    foam = {"type": "diffuse", "reflectance": weights[SEA_FOAM_REFLECTANCE]}
     return {
         "type": "blendbsdf",
-        "weight": vertex_values(sea.faces, attributes[SEA_FOAM]),
+        "weight": weights[SEA_FOAM],
         "bsdf_0": water,
         "bsdf_1": foam,
     }
