@@ -6,7 +6,8 @@ The benchmark scene (``scenes/benchmark.yaml``, 80×45) is rendered at visibilit
 references) and by ``physical`` (2^20-photon tables, four sampler seeds at 256 spp), both with
 the scene's ``sun.scale`` and ``sky.scale`` replaced by ``--sun`` and ``--sky`` and ``haze.g`` by
 ``--g`` (and the camera's heading by ``--heading``: 150° looks toward the sun; the sky by
-``--sky-model``, e.g. ``overcast``, and the sun's elevation by ``--sun-elevation``); then both
+``--sky-model``, e.g. ``overcast`` or ``broken`` with ``--cloud-seed`` choosing its cloud layer,
+and the sun's elevation by ``--sun-elevation``); then both
 without haze. It prints, per region (sea, sky, all vessels, and each of the
 first three vessels), the relative difference of the region means, physical against volpath,
 ± the volpath mean's standard error (from its batches).
@@ -18,7 +19,7 @@ camera looks up or down steeply (the haze's light from directions a level view n
 samples), and ``--bands N`` splits sky and sea into N row bands.
 
 Usage: python scripts/compare_components.py V [--batches 8] [--g 0.75] [--sun 1] [--sky 1]
-       [--sky-model clear|overcast] [--sun-elevation DEG]
+       [--sky-model clear|broken|overcast] [--cloud-seed N] [--sun-elevation DEG]
        [--heading DEG] [--pitch DEG] [--fov DEG] [--bands N] [--vessel-light SHARE]
 """
 
@@ -66,7 +67,10 @@ def main() -> None:
     parser.add_argument("--sun", type=float, default=1.0, help="sun.scale")
     parser.add_argument("--sky", type=float, default=1.0, help="sky.scale")
     parser.add_argument(
-        "--sky-model", choices=("clear", "overcast"), default=None, help="sky.model"
+        "--sky-model", choices=("clear", "broken", "overcast"), default=None, help="sky.model"
+    )
+    parser.add_argument(
+        "--cloud-seed", type=int, default=None, help="sky.clouds.seed of a broken sky"
     )
     parser.add_argument("--sun-elevation", type=float, default=None, help="sun.elevation_deg")
     parser.add_argument(
@@ -97,6 +101,8 @@ def main() -> None:
     changes: dict = {"sun": {"scale": args.sun}, "sky": {"scale": args.sky}}
     if args.sky_model is not None:
         changes["sky"]["model"] = args.sky_model
+    if args.cloud_seed is not None:
+        changes["sky"]["clouds"] = {"seed": args.cloud_seed}
     if args.sun_elevation is not None:
         changes["sun"]["elevation_deg"] = args.sun_elevation
     if args.g is not None:

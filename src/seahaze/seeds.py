@@ -47,6 +47,9 @@ class Stream(IntEnum):
     CAMERA_NOISE = 15
     """The sensor noise of a scene's PNGs, one realisation for its clean image and every level
     (``render.camera_model``)."""
+    # The sky (seahaze.clouds)
+    CLOUDS = 16
+    """The cloud layer of a broken sky (unless ``sky.clouds.seed`` is given)."""
 
 
 class RenderPass(IntEnum):

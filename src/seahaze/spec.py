@@ -172,17 +172,57 @@ class SunSpec(_Spec):
     )
 
 
-class SkySpec(_Spec):
-    """The sky above the haze layer: clear (Hosek & Wilkie 2012, Mitsuba `sunsky`) or overcast
-    (the CIE overcast sky, :mod:`seahaze.overcast`)."""
+class CloudSpec(_Spec):
+    """A broken cloud layer (seahaze.clouds): flat cumulus at a base height, covering `oktas`
+    eighths of the sky, seeded by the scene's seed."""
 
-    model: Literal["clear", "overcast"] = Field(
+    oktas: int = Field(
+        5,
+        ge=1,
+        le=7,
+        description="Cloud amount in eighths of the sky (WMO): 1-2 few, 3-4 scattered, 5-7 "
+        "broken; 8 is `sky.model: overcast`.",
+        json_schema_extra=_unit("okta"),
+    )
+    base_height_m: float = Field(
+        1000.0,
+        ge=100.0,
+        le=6000.0,
+        description="Height of the cloud base above the sea; must be above `haze.top_m`.",
+        json_schema_extra=_unit("m"),
+    )
+    size_m: float = Field(
+        1000.0,
+        ge=100.0,
+        le=20000.0,
+        description="Scale of the largest clouds (the lattice spacing of the noise's largest "
+        "octave; smaller ones go down to a sixteenth of it).",
+        json_schema_extra=_unit("m"),
+    )
+    seed: int | None = Field(
+        None, ge=0, description="Seed of the cloud layer; default derived from `render.seed`."
+    )
+
+
+class SkySpec(_Spec):
+    """The sky above the haze layer: clear (Hosek & Wilkie 2012, Mitsuba `sunsky`), broken
+    cloud (seahaze.clouds) or overcast (the CIE overcast sky, :mod:`seahaze.overcast`)."""
+
+    model: Literal["clear", "broken", "overcast"] = Field(
         "clear",
-        description="`clear`: the Hosek–Wilkie sun and sky. `overcast`: a full cloud deck "
+        description="`clear`: the Hosek–Wilkie sun and sky. `broken`: the clear sky with a "
+        "layer of cloud (`clouds`) that hides the sun when one lies in its direction; the "
+        "clouds are grey, as bright as Kasten & Czeplak's (1980) irradiance under that "
+        "amount of cloud asks. `overcast`: a full cloud deck "
         "hides the sun; the CIE overcast sky (radiance a third of the zenith's at the "
         "horizon, grey), as bright as the quarter of the clear sky's global irradiance at "
         "the same sun elevation and turbidity that cloud lets through (Kasten & Czeplak "
         "1980). The sun's elevation still sets how bright the day is.",
+    )
+    clouds: CloudSpec | None = Field(
+        None,
+        description="The cloud layer of a `broken` sky (default: its defaults); only with "
+        "`model: broken`.",
     )
     turbidity: float = Field(
         3.0,
@@ -214,7 +254,23 @@ class SkySpec(_Spec):
         data = handler(self)
         if self.model == "clear":
             data.pop("model", None)
+        if self.clouds is None:
+            data.pop("clouds", None)
         return data
+
+    @model_validator(mode="after")
+    def _clouds_only_when_broken(self) -> SkySpec:
+        if self.clouds is not None and self.model != "broken":
+            raise ValueError(
+                f"clouds: only a `broken` sky has a cloud layer (model is '{self.model}'); "
+                "set model: broken or remove clouds"
+            )
+        return self
+
+    @property
+    def cloud_layer(self) -> CloudSpec:
+        """The cloud layer of a broken sky: `clouds`, or its defaults."""
+        return self.clouds if self.clouds is not None else CloudSpec()
 
 
 class SeaSpec(_Spec):
@@ -1331,6 +1387,19 @@ class SceneSpec(_Spec):
                 "haze.patches and haze.bank need render.mode asm or reference: the physical "
                 "mode renders haze that varies with height alone; allowed: asm, reference"
             )
+        return self
+
+    @model_validator(mode="after")
+    def _clouds_above_the_haze(self) -> SceneSpec:
+        # The sky is drawn beyond the haze layer: a cloud base inside it would be cloud seen
+        # through haze that should be around it.
+        if self.sky.model == "broken":
+            base = self.sky.cloud_layer.base_height_m
+            if base <= self.haze.top_m:
+                raise ValueError(
+                    f"sky.clouds.base_height_m ({base:g} m) must be above haze.top_m "
+                    f"({self.haze.top_m:g} m): raise the cloud base or lower the haze top"
+                )
         return self
 
     @model_validator(mode="after")

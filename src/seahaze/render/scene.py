@@ -47,7 +47,7 @@ from ..world import (
 )
 from .fleet import VesselMaterial, bind_paint, fleet_meshes, vessel_materials, vessel_spheres
 from .mesh_textures import vertex_textures
-from .sky import sky_dict
+from .sky import sky_emitters
 
 SEA_SHAPE = -1
 """:attr:`LoadedScene.shape_ids` value of the sea mesh."""
@@ -373,7 +373,7 @@ def build_scene(
             0.0,
             haze_box,
         ),
-        "sky": sky_dict(spec),
+        **sky_emitters(spec),
         HAZE_BOX_ID: {
             "type": "cube",
             "to_world": mi.ScalarTransform4f()
@@ -403,7 +403,7 @@ def build_scene(
             camera, camera.width, camera.height, camera.fov_deg, camera.pitch_deg, False
         )
         clean = {"type": "scene", "integrator": integrator, "sensor": sensor}
-        clean_scene = mi.load_dict({**clean, "sky": sky_dict(spec), **surfaces})
+        clean_scene = mi.load_dict({**clean, **sky_emitters(spec), **surfaces})
     loaded = mi.load_dict(scene)
     params = mi.traverse(loaded)
     shape_ids: dict[int, int] = {}

@@ -1,21 +1,24 @@
-"""The lights of a scene as Mitsuba emitters: the sun and the sky, clear or overcast.
+"""The lights of a scene as Mitsuba emitters: the sun and the sky, clear, broken or overcast.
 
 A clear day is Mitsuba's Hosek–Wilkie ``sunsky``. An overcast day has no sun to see: its sky
 is the CIE overcast sky (:mod:`seahaze.overcast`) as an ``envmap``, grey, as bright as the
 light a full cloud deck lets through of the clear day's (measured on the clear ``sunsky`` of
-the same sun and turbidity, :func:`clear_global_irradiance`). The ``physical`` mode takes the
-sun and the sky apart (:func:`sun_and_sky_dicts`); the other modes' scenes hold the sky of
-:func:`sky_dict`, which for a clear day carries the sun too.
+the same sun and turbidity, :func:`clear_global_irradiance`). A day of broken cloud
+(:mod:`seahaze.clouds`) has both: an ``envmap`` of the clear sky with clouds of the overcast
+deck's gradation in it, and the sun, passed or hidden by the cloud in its direction. The
+``physical`` mode takes the sun and the sky apart (:func:`sun_and_sky_dicts`); the other modes'
+scenes hold the emitters of :func:`sky_emitters`, where a clear day's sky carries the sun too.
 """
 
 from __future__ import annotations
 
-from functools import cache
+from functools import cache, lru_cache
 
 import numpy as np
 
-from .. import overcast
-from ..spec import SceneSpec
+from .. import clouds, overcast
+from ..seeds import Stream, stream_seed
+from ..spec import SceneSpec, SkySpec, SunSpec
 from ..world import sun_direction
 
 IRRADIANCE_SAMPLES = 1 << 16
@@ -26,6 +29,10 @@ disk, is nearly exact)."""
 ENVMAP_ROWS = 512
 """Rows (zenith angles) of the overcast sky's image: 0.35° each, so the gradation, linear in
 ``cos θ``, is interpolated to better than 1e-5 of the zenith's radiance."""
+
+BROKEN_ROWS = 1024
+"""Rows of the broken sky's image (its columns twice as many): texels of 0.18°, about four
+pixels of a 1280-pixel-wide 60° view, so a cloud's edge stays an edge."""
 
 
 def sunsky_dict(spec: SceneSpec, sun: bool = True, sky: bool = True) -> dict:
@@ -61,18 +68,109 @@ def _sunsky(
     }
 
 
-def sky_dict(spec: SceneSpec) -> dict:
-    """The emitter a scene holds for its lights: the clear ``sunsky`` with its sun, or the
-    overcast sky alone."""
-    return overcast_dict(spec) if spec.sky.model == "overcast" else sunsky_dict(spec)
+def sky_emitters(spec: SceneSpec) -> dict[str, dict]:
+    """The emitters a scene holds for its lights, by scene key: the clear ``sunsky`` with its
+    sun, the overcast sky alone, or the broken sky and the sun it lets through.
+
+    A Mitsuba scene holds one environment emitter, so a broken sky's sun is a ``directional``
+    emitter of the sun disk's irradiance (the ``physical`` mode, which takes its own emitters,
+    keeps the disk): the same light, less the disk's half-degree width, which no hazy level's
+    scattering or the sea's glint resolves, and which a camera looking into the sun would."""
+    if spec.sky.model == "clear":
+        return {"sky": sunsky_dict(spec)}
+    sun, sky = sun_and_sky_dicts(spec)
+    if spec.sky.model == "overcast":
+        return {"sky": sky}
+    return {"sky": sky, "sun": _directional_sun(sun)}
+
+
+def _directional_sun(sun_dict: dict) -> dict:
+    """A ``directional`` emitter of a sun-only ``sunsky``'s disk irradiance and direction."""
+    import mitsuba as mi
+
+    from .sun_disk import disk_irradiance
+
+    irradiance = disk_irradiance(mi.load_dict(sun_dict))
+    return {
+        "type": "directional",
+        "direction": [-c for c in sun_dict["sun_direction"]],
+        "irradiance": {"type": "rgb", "value": [float(c) for c in irradiance]},
+    }
 
 
 def sun_and_sky_dicts(spec: SceneSpec) -> tuple[dict, dict]:
     """The sun alone and the sky alone (the ``physical`` mode samples the sun on its own). An
-    overcast day's sun is a ``sunsky`` with both parts off: it adds nothing."""
+    overcast day's sun is a ``sunsky`` with both parts off: it adds nothing; a broken sky's
+    sun is scaled by the share of its beam the cloud in its direction passes."""
     if spec.sky.model == "overcast":
         return sunsky_dict(spec, sun=False, sky=False), overcast_dict(spec)
+    if spec.sky.model == "broken":
+        sun = sunsky_dict(spec, sky=False)
+        sun["sun_scale"] *= cloud_layer(spec).sun_transmission(
+            sun_direction(spec.sun.elevation_deg, spec.sun.azimuth_deg)
+        )
+        return sun, broken_dict(spec)
     return sunsky_dict(spec, sky=False), sunsky_dict(spec, sun=False)
+
+
+def cloud_layer(spec: SceneSpec) -> clouds.CloudLayer:
+    """The broken cloud layer of ``spec`` (``sky.clouds``), its seed from the scene's."""
+    c = spec.sky.cloud_layer
+    seed = stream_seed(spec.render.seed, Stream.CLOUDS, c.seed)
+    return clouds.CloudLayer(c.oktas, c.base_height_m, c.size_m, seed)
+
+
+def broken_dict(spec: SceneSpec) -> dict:
+    """The broken sky of ``spec`` as an ``envmap`` (:func:`seahaze.clouds.broken_sky_radiance`):
+    the clear ``sunsky``'s sky radiance at each texel's direction, cloud of the overcast deck's
+    gradation where the layer covers it; scaled by ``sky.scale`` (the clear sky already is)."""
+    import mitsuba as mi
+
+    return _envmap(mi.Bitmap(_broken_image(spec.sun, spec.sky, cloud_layer(spec))))
+
+
+@lru_cache(maxsize=2)
+def _broken_image(sun: SunSpec, sky: SkySpec, layer: clouds.CloudLayer) -> np.ndarray:
+    """The broken sky's image (kept for the scene's other builds: the clean pass's scene, the
+    ``physical`` mode's emitters; each is a second or two of noise)."""
+    clear_sky = _sunsky(
+        sun.elevation_deg, sun.azimuth_deg, sky.turbidity, sky.ground_albedo, 0.0, sky.scale
+    )
+    clear = _latlong_of(clear_sky, BROKEN_ROWS, 2 * BROKEN_ROWS)
+    zenith = overcast.zenith_radiance(
+        clear_global_irradiance(
+            sun.elevation_deg, sun.azimuth_deg, sky.turbidity, sky.ground_albedo
+        )
+    )
+    image = clouds.broken_sky_radiance(clear, zenith * sky.scale, layer)
+    return image
+
+
+def _latlong_of(emitter_dict: dict, rows: int, columns: int) -> np.ndarray:
+    """An environment emitter's radiance (linear RGB) at the texel centres of a
+    latitude–longitude image laid out as :func:`seahaze.clouds.latlong_directions`."""
+    import drjit as dr
+    import mitsuba as mi
+
+    emitter = mi.load_dict(emitter_dict)
+    directions = clouds.latlong_directions(rows, columns).reshape(-1, 3)
+    si = dr.zeros(mi.SurfaceInteraction3f, len(directions))
+    si.wi = -mi.Vector3f(*(np.ascontiguousarray(directions[:, k], np.float32) for k in range(3)))
+    radiance = np.array(emitter.eval(si), np.float64)
+    radiance = radiance if radiance.shape[-1] == 3 else radiance.T
+    return radiance.reshape(rows, columns, 3)
+
+
+def _envmap(bitmap: object) -> dict:
+    """An ``envmap`` of a latitude–longitude image whose top row is the zenith, turned so that
+    the image's up (Mitsuba's ``envmap`` looks up along its local +y) is the world's +z."""
+    import mitsuba as mi
+
+    return {
+        "type": "envmap",
+        "bitmap": bitmap,
+        "to_world": mi.ScalarTransform4f().rotate([1.0, 0.0, 0.0], 90.0),
+    }
 
 
 def overcast_dict(spec: SceneSpec) -> dict:
@@ -85,12 +183,7 @@ def overcast_dict(spec: SceneSpec) -> dict:
         spec.sun.elevation_deg, spec.sun.azimuth_deg, spec.sky.turbidity, spec.sky.ground_albedo
     )
     zenith = overcast.zenith_radiance(clear) * spec.sky.scale
-    image = overcast.latlong_radiance(zenith, ENVMAP_ROWS)
-    return {
-        "type": "envmap",
-        "bitmap": mi.Bitmap(image),
-        "to_world": mi.ScalarTransform4f().rotate([1.0, 0.0, 0.0], 90.0),
-    }
+    return _envmap(mi.Bitmap(overcast.latlong_radiance(zenith, ENVMAP_ROWS)))
 
 
 @cache
