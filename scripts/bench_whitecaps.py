@@ -12,11 +12,18 @@ of the imaged sea area is ``W``. This script measures rendered images the same w
   water at the same range: the median luminance of the sea pixels of the same image row
   (whitecaps cover a few per cent, so the median is water).
 * **Threshold.** A pixel is whitecap where its luminance exceeds :data:`THRESHOLD_RATIO` (2.5)
-  times that median. Koepke's (1984) effective reflectance 0.22 is fresh foam (0.55) decaying
-  exponentially until it no longer counts as whitecap, ``(1 - e^-T)/T = 0.4``, ``T = 2.3``:
-  the faintest counted whitecap reflects ``0.55·e^-2.3 = 0.055``, about 2-3 times the near
-  sea's Lambertian-equivalent reflectance (Fresnel sky reflection plus the water body). The
-  2.0 and 3.5 columns show how much the figure depends on it.
+  times that median. The 2.0 and 3.5 columns show how much the figure depends on it.
+* **What the threshold means.** Koepke's (1984) effective reflectance 0.22 is fresh foam (0.55)
+  decaying exponentially until it no longer counts as whitecap, ``(1 - e^-T)/T = 0.4``,
+  ``T = 2.23``: the faintest counted whitecap reflects ``0.55·e^-2.23 = 0.059``
+  (:data:`~seahaze.ocean.whitecaps.COUNTED_FOAM_REFLECTANCE`). Which foam reflectance the
+  luminance threshold asks for depends on how bright the water is against a white sea, so every
+  view is rendered twice more (calibration, not part of the photograph): with a white
+  Lambertian sea (all foam, reflectance 1: luminance ``D``) and with black foam (reflectance 0:
+  ``(1 - f)·water``). A pixel's foam albedo is then ``f·R = (L - L_black)/D``, and the
+  threshold's foam reflectance is ``2.5·water/D`` (area-weighted mean over the band). The
+  column "foam ≥ 0.059" is the share of the band whose rendered foam albedo reaches Koepke's
+  faintest counted whitecap: the coverage a photograph would show with its threshold there.
 * **Area, not pixels.** The law is a fraction of the sea's area. A pixel's area on the sea is
   ``Ω·d²/sin(α)`` (solid angle, distance, depression angle), which grows like ``d³``: weighted
   over the whole image the horizon's pixels, each a mixture of whitecaps and water that no
@@ -146,10 +153,36 @@ def open_sea_spec(
     return SceneSpec.model_validate(data)
 
 
+def calibration_luminances(session, spp: int) -> tuple[np.ndarray, np.ndarray]:
+    """Luminance of the view with a white Lambertian sea (every vertex foam of reflectance 1)
+    and with black foam (reflectance 0), at the same samples as the image."""
+    from dataclasses import replace
+
+    from seahaze.render.engine import open_session
+    from seahaze.world import SEA_FOAM, SEA_FOAM_REFLECTANCE
+
+    geometry = session.geometry
+    attributes = geometry.sea.attributes
+    if SEA_FOAM not in attributes:  # no foam at all: foam albedo 0 everywhere
+        attributes = {
+            **attributes,
+            SEA_FOAM: np.zeros(len(geometry.sea.vertices), np.float32),
+            SEA_FOAM_REFLECTANCE: np.zeros(len(geometry.sea.vertices), np.float32),
+        }
+    one = np.ones_like(attributes[SEA_FOAM])
+    out = []
+    for changes in ({SEA_FOAM: one, SEA_FOAM_REFLECTANCE: one}, {SEA_FOAM_REFLECTANCE: 0 * one}):
+        sea = replace(geometry.sea, attributes={**attributes, **changes})
+        variant = open_session(session.spec, geometry=replace(geometry, sea=sea))
+        out.append(variant.render_clean(spp) @ LUMINANCE)
+    return out[0], out[1]
+
+
 def render_view(
     wind: float, heading_deg: float, res: tuple[int, int], spp: int, sea_seed: int
 ) -> dict:
     """Render one view's clean image and measure it; returns the figures and the image."""
+    from seahaze.ocean.whitecaps import COUNTED_FOAM_REFLECTANCE
     from seahaze.render.engine import open_session
 
     spec = open_sea_spec(wind, heading_deg, res, spp, sea_seed)
@@ -171,6 +204,14 @@ def render_view(
         coverage, band_area = measure_coverage(luminance, sea, area, footprint, ratio)
         result[f"coverage_{ratio:g}"] = coverage
         result["band_area_m2"] = band_area
+    white, black = calibration_luminances(session, spp)
+    water = row_water_luminance(luminance, sea)
+    band = sea & (footprint <= FOOTPRINT_M) & np.isfinite(water)
+    foam_albedo = (luminance - black) / np.maximum(white, 1e-12)
+    counted = band & (foam_albedo >= COUNTED_FOAM_REFLECTANCE)
+    result["coverage_koepke"] = float(np.sum(area[counted]) / np.sum(area[band]))
+    threshold = THRESHOLD_RATIO * np.broadcast_to(water, luminance.shape) / np.maximum(white, 1e-12)
+    result["threshold_reflectance"] = float(np.sum((area * threshold)[band]) / np.sum(area[band]))
     result["rgb"] = rgb
     return result
 
@@ -191,7 +232,7 @@ def measure_wind(wind: float, res: tuple[int, int], spp: int, images: Path | Non
         views.append(view)
     area = sum(v["band_area_m2"] for v in views)
     row: dict[str, float] = {"wind": wind, "law": float(whitecap_coverage(wind))}
-    for key in [k for k in views[0] if k.startswith("coverage_")]:
+    for key in [k for k in views[0] if k.startswith(("coverage_", "threshold_"))]:
         row[key] = sum(v[key] * v["band_area_m2"] for v in views) / area
     row["global"] = float(np.mean([v["global"] for v in views]))
     row["band_area_m2"] = area
@@ -226,9 +267,9 @@ def _table(rows: list[dict], before: dict[float, dict]) -> list[str]:
         rule += "---|---|"
     head += (
         f" rendered | ratio | seeds' range | at {low:g}× | at {high:g}× |"
-        " sea pixels > 2.5× median |"
+        " sea pixels > 2.5× median | threshold as foam reflectance | foam ≥ 0.059 | ratio |"
     )
-    rule += "---|---|---|---|---|---|"
+    rule += "---|---|---|---|---|---|---|---|---|"
     lines = [head, rule]
     for row in rows:
         law = row["law"]
@@ -244,6 +285,13 @@ def _table(rows: list[dict], before: dict[float, dict]) -> list[str]:
             f" {100 * row[f'coverage_{low:g}']:.2f} % | {100 * row[f'coverage_{high:g}']:.2f} % |"
             f" {100 * row['global']:.2f} % |"
         )
+        if "coverage_koepke" in row:
+            line += (
+                f" {row['threshold_reflectance']:.3f} | {100 * row['coverage_koepke']:.2f} % |"
+                f" {row['coverage_koepke'] / law:.2f} |"
+            )
+        else:
+            line += " | | |"
         lines.append(line)
     return lines
 

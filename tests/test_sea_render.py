@@ -131,18 +131,19 @@ def test_vessel_meta_records_the_speed() -> None:
 
 
 def test_sea_geometry_carries_foam_wakes_and_the_roughness_mix() -> None:
-    """The sea mesh's attributes: the whitecaps' foam (the coverage law's W in the far
-    field), the wake of a moving vessel, and the near-lobe weight; the switches remove them."""
+    """The sea mesh's attributes: the whitecaps' foam (in the far field the coverage law's W
+    and the residual foam around the whitecaps, 1.25 W), the wake of a moving vessel, and the
+    near-lobe weight; the switches remove them."""
     moving = _spec(vessels={"placed": [{**TUG, "speed_kn": 12.0}]})
     camera = Camera.from_spec(moving.camera)
     geometry = build_geometry(moving, camera)
     sea = geometry.sea
     assert set(sea.attributes) == {SEA_FOAM, SEA_FOAM_REFLECTANCE, SEA_NEAR_ROUGHNESS}
     law = ocean.whitecap_coverage(12.0)
-    assert geometry.sea_foam_coverage == pytest.approx(law)
+    assert geometry.sea_foam_coverage == pytest.approx(1.25 * law)
     r = np.hypot(sea.vertices[:, 0], sea.vertices[:, 1])
     far = sea.attributes[SEA_FOAM][(r > 5_000.0) & (r < 20_000.0)]
-    assert float(np.mean(far)) == pytest.approx(law, rel=0.3)  # cells of distant whitecaps
+    assert float(np.mean(far)) == pytest.approx(1.25 * law, rel=0.3)  # distant whitecaps
     assert geometry.sea_roughness == pytest.approx(ocean.cox_munk_alpha(12.0))
     assert geometry.sea_roughness_near is not None
     assert geometry.sea_roughness_near < geometry.sea_roughness
@@ -188,8 +189,11 @@ def test_the_loaded_scene_exposes_the_flat_sea_optics_for_the_physical_table() -
     geometry = build_geometry(spec, camera)
     loaded = build_scene(spec, camera, geometry, [1000.0], haze_box=False)
     assert loaded.sea_roughness == pytest.approx(ocean.cox_munk_alpha(12.0))
-    assert loaded.sea_foam_coverage == pytest.approx(ocean.whitecap_coverage(12.0))
-    assert loaded.sea_foam_reflectance == ocean.FOAM_REFLECTANCE
+    # The plane model's foam is the whitecaps' and their residual foam's: W·(1 + 0.5/2) at
+    # a mean albedo of Koepke's W·R_eff and the residual's few per cent.
+    coverage, reflectance = loaded.sea_foam_coverage, loaded.sea_foam_reflectance
+    assert coverage == pytest.approx(1.25 * ocean.whitecap_coverage(12.0))
+    assert 1.0 < coverage * reflectance / ocean.whitecap_albedo(12.0) < 1.1
     (shape,) = [s for s in loaded.scene.shapes() if s.id() == "sea"]
     water = mi.load_dict(water_bsdf_dict(spec, loaded.sea_roughness))
     n = 4096

@@ -109,8 +109,12 @@ class SceneGeometry:
     """Beckmann ``alpha`` where the mesh resolves its waves (the sub-grid slopes only); None
     when the whole sea has :attr:`sea_roughness` (flat sea, or ``sea.roughness`` given)."""
     sea_foam_coverage: float = 0.0
-    """Mean foam fraction of the sea surface (0–1): the whitecap coverage ``W`` of the wind
-    (0 without whitecaps). Its mean reflectance is :data:`ocean.FOAM_REFLECTANCE`."""
+    """Mean foam fraction of the sea surface (0–1): the whitecaps' ``FoamField.mean_fraction``,
+    the coverage ``W`` of the wind and the faint residual foam around it (0 without
+    whitecaps)."""
+    sea_foam_reflectance: float = ocean.FOAM_REFLECTANCE
+    """Mean reflectance of that foam (``FoamField.mean_reflectance``): coverage × reflectance
+    is the mean foam albedo of the sea mesh."""
     camera_xy: tuple[float, float] = (0.0, 0.0)
     """Horizontal camera position (m) the distances are measured from (a ship platform's)."""
 
@@ -130,7 +134,8 @@ class SceneGeometry:
                 h.update(key.encode())
                 h.update(np.ascontiguousarray(mesh.attributes[key], np.float32).tobytes())
         near = -1.0 if self.sea_roughness_near is None else self.sea_roughness_near
-        h.update(np.asarray([self.sea_roughness, near, self.sea_foam_coverage]).tobytes())
+        foam = [self.sea_foam_coverage, self.sea_foam_reflectance]
+        h.update(np.asarray([self.sea_roughness, near, *foam]).tobytes())
         return h.hexdigest()
 
 
@@ -163,6 +168,7 @@ class Sea:
     surface: ocean.OceanSurface
     roughness_near: float | None = None
     foam_coverage: float = 0.0
+    foam_reflectance: float = ocean.FOAM_REFLECTANCE
 
 
 def sea_whitecaps(spec: SceneSpec, surface: ocean.OceanSurface) -> ocean.FoamField | None:
@@ -221,8 +227,9 @@ def build_sea(
             near = mix.alpha_near
             attributes[SEA_NEAR_ROUGHNESS] = mix.near_weight
     sea = MeshData("sea", mesh.vertices, mesh.faces, spec.sea.water_color, roughness, attributes)
-    coverage = foam.mean_fraction if foam is not None else 0.0
-    return Sea(sea, roughness, surface, near, coverage)
+    if foam is None:
+        return Sea(sea, roughness, surface, near)
+    return Sea(sea, roughness, surface, near, foam.mean_fraction, foam.mean_reflectance)
 
 
 def vessel_speeds(spec: SceneSpec, placements: Sequence[vessels.Placement]) -> list[float]:
@@ -531,5 +538,6 @@ def build_geometry(spec: SceneSpec, camera: Camera, frame: int | None = None) ->
         instances,
         sea_roughness_near=sea.roughness_near,
         sea_foam_coverage=sea.foam_coverage,
+        sea_foam_reflectance=sea.foam_reflectance,
         camera_xy=(camera.x_m, camera.y_m),
     )

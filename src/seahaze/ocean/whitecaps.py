@@ -22,48 +22,60 @@ Reflectance (Koepke 1984)
     less: Koepke's *effective* reflectance is ``R_eff = 0.22 ± 0.11`` in the visible (Koepke, P.
     (1984). Effective reflectance of oceanic whitecaps. *Appl. Opt.* 23(11), 1816–1824). The
     coverage ``W`` counts young and decaying whitecaps together, so the mean reflectance of the
-    foam-covered area must be the effective value (:data:`FOAM_REFLECTANCE`).
+    counted area must be the effective value (:data:`FOAM_REFLECTANCE`).
 
-    Inside that area the reflectance is not uniform: the actively breaking front is fresh foam
-    (:data:`FRESH_FOAM_REFLECTANCE`), the foam left behind thins as it ages. The foam field has
-    no age, so :meth:`FoamField.foam_and_reflectance` takes the breaking rank as a proxy: the
-    most compressed crest is the youngest foam, and the reflectance falls exponentially with the
-    Jacobian's quantile, ``R(q) = 0.55·exp(-k·q/W)``, with ``k`` (:data:`FOAM_AGE_DECAY`, 2.18)
-    set so that the foam-weighted mean over a whitecap is exactly ``R_eff = 0.22`` — Koepke's
-    own model of the effective reflectance, a fresh reflectance decaying exponentially over a
-    whitecap's life, with the quantile standing in for the age. The result: bright white cores
-    (reflectance above 0.4 on 15 % of the covered area: the actively breaking part is a small
-    share of all whitecaps) fading into grey skirts, while the sea's mean albedo gain stays
-    ``W·R_eff``.
+    ``W`` is *photographed* coverage: the area brighter than a threshold. Koepke's effective
+    reflectance is his model of what that area reflects: fresh foam decaying exponentially
+    over a whitecap's counted life, which ends when it no longer stands out, so that the mean is
+    ``0.55·(1 - e^-k)/k = 0.22``: ``k = 2.23`` (:data:`FOAM_AGE_DECAY`), and the faintest
+    counted whitecap reflects ``0.55·e^-k = 0.059`` (:data:`COUNTED_FOAM_REFLECTANCE`, about a
+    tenth of fresh foam). The foam field has no age, so :meth:`FoamField.foam_and_reflectance`
+    takes the breaking rank as a proxy: the most compressed crest is the youngest foam, and
+    the reflectance falls exponentially with the Jacobian's quantile,
+    ``R(q) = 0.55·exp(-k·q/W)``. Over the counted area ``q <= W`` the foam is whole (fraction 1),
+    so that area is exactly ``W`` and reflects ``R_eff`` on average — bright white cores
+    (reflectance above 0.4 on 14 % of it: the actively breaking part is a small share of all
+    whitecaps) fading into grey skirts.
+
+    Beyond it lies residual foam, thinning and fading below the threshold (photographs do not
+    count it, but it is there: the area counted grows as the threshold falls, Callaghan & White
+    2009): over ``W < q < W·(1 + w)``, ``w`` = :data:`RESIDUAL_FOAM_WIDTH` (0.5), the fraction
+    falls from 1 to 0 (a smoothstep) while the reflectance continues its decay, so its foam
+    albedo stays below ``0.059``. It adds ``w/2`` of ``W`` to the foam fraction and 5 % to the
+    foam albedo (:attr:`FoamField.mean_fraction` = 1.25 ``W``, :attr:`FoamField.albedo` =
+    ``W·(R_eff + 0.011)``). (An earlier profile spread ``W`` over a smoothstep from ``W/2`` to
+    ``3W/2`` with ``k`` solved over the whole of it: its faint partial rims counted towards
+    ``W`` although no photograph would count them.)
 
 Placement (Tessendorf 2001)
     A crest breaks where the choppy horizontal map ``x0 -> x0 + lambda·D(x0)`` compresses the
     surface: its Jacobian ``J`` falls toward 0 (and below 0 the surface folds; Tessendorf 2001,
-    §4.3, marks such points as foam). :class:`FoamField` puts foam where ``J`` is smallest, with
-    the threshold set so that the covered **world** area fraction equals ``W``: over a periodic
-    patch (FFT) or a square of 8 peak wavelengths (Gerstner) the world-area-weighted
-    distribution of ``J`` is tabulated (weight ``J`` itself: a rest area ``dA0`` covers
-    ``J·dA0`` of the world), and the foam fraction is a smoothstep in that distribution's
-    quantile ``q(J)``: 1 for ``q < W - h``, 0 for ``q > W + h``, ``h = W/2``. Whatever the
-    shape of the distribution the mean foam fraction of the world area is then exactly ``W``;
-    the edges are soft because ``J`` varies smoothly in space. For the FFT ocean only the
-    largest patch (wavelengths from 8 down to 1/8 of the peak wavelength) decides where the
-    foam is, so it marks breaking of the dominant waves and is not speckle at the scale of the
-    short patches. The short patches shape it: their compression, at :data:`DETAIL_WEIGHT`
-    (half) weight, is added to the indicator, ``J_0 + 0.5·Σ_i (J_i - 1)``, which breaks the
-    smooth blobs of the coarse grid into the ragged, holed, lacy patches of real whitecaps
-    (the short waves riding on a breaking crest break with it). A mesh can only carry a patch's
-    detail where its vertex spacing resolves that patch's grid, so each detail level ``l``
-    (patches 1..l added) has its own quantile table (each covering exactly ``W``) and the foam
-    at a vertex of spacing ``Δ`` blends the levels by :func:`~seahaze.ocean.base.lowpass_weight`
-    of four grid spacings of each patch: the full lace under the camera, the coarse blobs far
-    away, the coverage ``W`` everywhere. With zero choppiness the foam is placed with the
-    Jacobian the surface would have at ``lambda = 1`` (the same crests).
+    §4.3, marks such points as foam). :class:`FoamField` puts foam where ``J`` is smallest, with the
+    threshold set so that the covered **world** area fraction equals ``W``: over a periodic patch
+    (FFT) or a square of 8 peak wavelengths (Gerstner) the world-area-weighted distribution of ``J``
+    is tabulated (weight ``J`` itself: a rest area ``dA0`` covers ``J·dA0`` of the world), and the
+    foam fraction is a function of that distribution's quantile ``q(J)``: 1 for ``q <= W``, the
+    residual foam's ramp to 0 at ``q = 1.5·W``. Whatever the shape of the distribution the whole
+    foam then covers exactly ``W`` of the world area; the edges are soft because ``J`` varies
+    smoothly in space. For the FFT ocean only the largest patch (wavelengths from 8 down to 1/8 of
+    the peak wavelength) decides where the foam is, so it marks breaking of the dominant waves and
+    is not speckle at the scale of the short patches. The short patches shape it: their compression,
+    at :data:`DETAIL_WEIGHT` (half) weight, is added to the indicator, ``J_0 + 0.5·Σ_i (J_i - 1)``,
+    which breaks the smooth blobs of the coarse grid into the ragged, holed, lacy patches of real
+    whitecaps (the short waves riding on a breaking crest break with it). A mesh can only carry a
+    patch's detail where its vertex spacing resolves that patch's grid, so each detail level ``l``
+    (patches 1..l added) has its own quantile table (in each the whole foam covers exactly ``W``)
+    and the foam at a vertex of spacing ``Δ`` blends the levels by
+    :func:`~seahaze.ocean.base.lowpass_weight` of four grid spacings of each patch: the full lace
+    under the camera, the coarse blobs far away, the coverage ``W`` everywhere. With zero choppiness
+    the foam is placed with the Jacobian the surface would have at ``lambda = 1`` (the same crests).
 
 Far field
-    Beyond the mesh's fade radius breaking cannot be resolved; there the expected foam fraction
-    is the coverage itself, :attr:`FoamField.mean_fraction` (``W``), and the mean reflectance of
-    the sea gains ``W·R_eff``.
+    Where the mesh does not resolve breaking (the sea outside the view) the expected foam
+    fraction is :attr:`FoamField.mean_fraction` (``1.25·W``: the counted whitecaps and their
+    residual foam) and its albedo :attr:`FoamField.albedo`, the field's own world-area means, so
+    near and far sea agree; a plane model of the sea gives that fraction the reflectance
+    :attr:`FoamField.mean_reflectance` (0.185).
 
 Limits: no foam memory (a patch of foam does not drift or decay after the crest has passed),
 no spray or streaks, coverage from the wind alone (not from the generated wave steepness).
@@ -100,35 +112,50 @@ FRESH_FOAM_REFLECTANCE = 0.55
 EFFECTIVE_FRACTION = FOAM_REFLECTANCE / FRESH_FOAM_REFLECTANCE
 """Koepke's ratio of the effective to the fresh reflectance (0.4)."""
 
-EDGE_SOFTNESS = 0.5
-"""Half-width of the foam edge ramp in quantile space, as a fraction of ``W``."""
+RESIDUAL_FOAM_WIDTH = 0.5
+"""Width, as a fraction of ``W`` in quantile space, of the residual foam beyond the counted
+whitecap area: over it the foam fraction falls from 1 to 0 (a smoothstep) while the reflectance
+goes on decaying below the photographic threshold. A visual choice, not a measured one: it keeps
+the field smooth (``J`` varies smoothly in space, a hard edge would jump by 1 within a
+centimetre); the counted coverage does not depend on it (module docstring)."""
 
 
-def _foam_profile(u: np.ndarray) -> np.ndarray:
-    """Foam fraction as a function of ``u = q/W`` (the quantile in units of the coverage): 1 up
-    to ``1 - EDGE_SOFTNESS``, a smoothstep down to 0 at ``1 + EDGE_SOFTNESS``."""
-    t = np.clip((u - (1.0 - EDGE_SOFTNESS)) / (2.0 * EDGE_SOFTNESS), 0.0, 1.0)
+def _counted_life_decay() -> float:
+    """``k`` with ``(1 - e^-k)/k = EFFECTIVE_FRACTION``: the mean of ``exp(-k·u)`` over the
+    counted life ``0 <= u <= 1`` is Koepke's 0.4, so the counted area reflects ``R_eff``."""
+    from scipy.optimize import brentq
+
+    def excess(k: float) -> float:
+        return -math.expm1(-k) / k - EFFECTIVE_FRACTION
+
+    return float(brentq(excess, 1e-6, 50.0, xtol=1e-14))
+
+
+FOAM_AGE_DECAY = _counted_life_decay()
+"""``k`` of the foam reflectance ``R(q) = R_fresh·exp(-k·q/W)`` (2.23; module docstring)."""
+
+COUNTED_FOAM_REFLECTANCE = FRESH_FOAM_REFLECTANCE * math.exp(-FOAM_AGE_DECAY)
+"""Reflectance of the faintest counted whitecap, at the edge of the area ``W`` (0.059: fresh
+foam decayed by ``e^-k``, about a factor 10, Koepke 1984)."""
+
+
+def _residual_profile(t: np.ndarray) -> np.ndarray:
+    """Foam fraction across the residual edge, ``t`` from 0 (the counted area's edge) to 1."""
+    t = np.clip(t, 0.0, 1.0)
     return 1.0 - t * t * (3.0 - 2.0 * t)
 
 
-def _age_decay_constant() -> float:
-    """``k`` with ``∫f(u)·exp(-k·u) du / ∫f(u) du = EFFECTIVE_FRACTION`` (``f`` the foam
-    profile): the foam-weighted mean reflectance of a whitecap is then ``R_eff``."""
-    from scipy.optimize import brentq
+def residual_foam_albedo(width: float) -> float:
+    """``∫ f(u)·R_fresh·exp(-k·u) du`` over the residual edge ``1 <= u <= 1 + width`` (in units
+    of ``W``): the foam albedo the residual foam adds per unit of coverage (Gauss-Legendre)."""
+    if width <= 0.0:
+        return 0.0
+    nodes, weights = np.polynomial.legendre.leggauss(32)
+    t = 0.5 * (nodes + 1.0)
+    u = 1.0 + width * t
+    integrand = _residual_profile(t) * np.exp(-FOAM_AGE_DECAY * u)
+    return float(FRESH_FOAM_REFLECTANCE * 0.5 * width * np.sum(weights * integrand))
 
-    nodes, weights = np.polynomial.legendre.leggauss(64)
-    end = 1.0 + EDGE_SOFTNESS
-    u = 0.5 * end * (nodes + 1.0)
-    w = 0.5 * end * weights * _foam_profile(u)
-
-    def excess(k: float) -> float:
-        return float(np.sum(w * np.exp(-k * u)) / np.sum(w)) - EFFECTIVE_FRACTION
-
-    return float(brentq(excess, 1e-6, 50.0, xtol=1e-12))
-
-
-FOAM_AGE_DECAY = _age_decay_constant()
-"""``k`` of the foam reflectance ``R(q) = R_fresh·exp(-k·q/W)`` (2.18; module docstring)."""
 
 DETAIL_WEIGHT = 0.5
 """Weight of the shorter FFT patches' compression ``J_i - 1`` in the breaking indicator (a
@@ -214,6 +241,8 @@ class FoamField:
         if not 0.0 <= w <= 1.0:
             raise ValueError("coverage must be in [0, 1]")
         self.coverage = float(w)
+        # Residual foam beyond the counted area, within the quantile range [W, 1].
+        self._residual_q = min(RESIDUAL_FOAM_WIDTH * self.coverage, 1.0 - self.coverage)
         indicators = _breaking_indicators(surface)
         self._levels: list[_Level] = []
         if not indicators or self.coverage == 0.0:
@@ -222,25 +251,45 @@ class FoamField:
         x, y, world_weight = _tabulation_sample(surface)
         for indicator, wavelength in indicators:
             self._levels.append(_Level(indicator, x, y, world_weight, wavelength))
-        half_width = EDGE_SOFTNESS * min(self.coverage, 1.0 - self.coverage)
-        self._q_lo = self.coverage - half_width
-        self._q_hi = self.coverage + half_width
 
     @property
     def mean_fraction(self) -> float:
-        """Expected foam fraction of a large area (the coverage ``W``): what a renderer should
-        use where the mesh cannot resolve breaking (beyond the fade radius)."""
-        return self.coverage
+        """Expected foam fraction of a large area: the counted whitecaps ``W`` plus the residual
+        foam's mean fraction (``W + W·RESIDUAL_FOAM_WIDTH/2``: a smoothstep ramp averages 1/2).
+        What a renderer should use where the mesh does not resolve breaking."""
+        return self.coverage + 0.5 * self._residual_q
 
     @property
     def albedo(self) -> float:
-        """Mean foam albedo of a large area, ``W·R_eff`` (:func:`whitecap_albedo`)."""
-        return self.coverage * FOAM_REFLECTANCE
+        """Mean foam albedo (fraction × reflectance) of a large area: ``W·R_eff`` of the counted
+        whitecaps (:func:`whitecap_albedo`) plus the faint residual foam's."""
+        if self.coverage == 0.0:
+            return 0.0
+        width = self._residual_q / self.coverage
+        return self.coverage * (FOAM_REFLECTANCE + residual_foam_albedo(width))
+
+    @property
+    def mean_reflectance(self) -> float:
+        """Foam-weighted mean reflectance of the foam, ``albedo / mean_fraction`` (a little below
+        Koepke's 0.22, which is the counted whitecaps' alone): the Lambertian albedo a model of
+        the sea as a plane gives its foam fraction :attr:`mean_fraction`."""
+        if self.mean_fraction == 0.0:
+            return FOAM_REFLECTANCE
+        return self.albedo / self.mean_fraction
 
     @property
     def jacobian_threshold(self) -> float:
-        """Indicator value (full detail) below which more than half of a point is foam
-        (``q = W``)."""
+        """Indicator value (full detail) below which more than half of a point is foam (the
+        middle of the residual edge, ``q = W + W·RESIDUAL_FOAM_WIDTH/2``)."""
+        if not self._levels:
+            return -math.inf
+        finest = self._levels[-1]
+        return float(np.interp(self.mean_fraction, finest.q_sorted, finest.j_sorted))
+
+    @property
+    def counted_jacobian(self) -> float:
+        """Indicator value (full detail) at the edge of the counted whitecaps (``q = W``): below
+        it the foam is whole and brighter than :data:`COUNTED_FOAM_REFLECTANCE`."""
         if not self._levels:
             return -math.inf
         finest = self._levels[-1]
@@ -266,10 +315,12 @@ class FoamField:
         """Foam fraction (0–1) and the visible reflectance of that foam at rest positions (m).
 
         The reflectance is ``R_fresh·exp(-k·q/W)`` (module docstring): 0.55 on the most
-        compressed crests, fading toward the whitecap's edge; its foam-weighted mean over the
-        sea is :data:`FOAM_REFLECTANCE`. Where there is no foam it is still defined (the value
-        the foam would have there). ``spacing_m``: a mesh's vertex spacing (m), which blends
-        the detail levels (module docstring); None gives the full detail.
+        compressed crests, fading to :data:`COUNTED_FOAM_REFLECTANCE` at the counted whitecap's
+        edge and below it over the residual foam; its mean over the counted whitecaps is
+        :data:`FOAM_REFLECTANCE`, over all the foam :attr:`mean_reflectance`. Where there is no
+        foam it is still defined (the value the foam would have there). ``spacing_m``: a mesh's
+        vertex spacing (m), which blends the detail levels (module docstring); None gives the
+        full detail.
         """
         x0, y0 = np.broadcast_arrays(np.asarray(x0, dtype=float), np.asarray(y0, dtype=float))
         shape = x0.shape
@@ -298,10 +349,11 @@ class FoamField:
         return fraction, reflectance
 
     def _profile(self, q: np.ndarray) -> np.ndarray:
-        if self._q_hi <= self._q_lo:
+        """Foam fraction at quantile ``q``: whole foam over the counted area ``q <= W``, the
+        residual foam's ramp beyond."""
+        if self._residual_q <= 0.0:
             return (q <= self.coverage).astype(float)
-        t = np.clip((q - self._q_lo) / (self._q_hi - self._q_lo), 0.0, 1.0)
-        return 1.0 - t * t * (3.0 - 2.0 * t)
+        return _residual_profile((q - self.coverage) / self._residual_q)
 
     def _level_weights(
         self, spacing_m: np.ndarray | float | None, shape: tuple[int, ...]

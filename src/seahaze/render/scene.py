@@ -223,12 +223,14 @@ class LoadedScene:
     for the wind (or the spec's ``sea.roughness``), the far sea's lobe. A model of the sea as a
     plane (the ``physical`` mode's table) reflects with ``water_bsdf_dict(spec, sea_roughness)``."""
     sea_foam_coverage: float = 0.0
-    """Mean fraction (0–1) of the sea surface covered by foam: the whitecap coverage law's
-    ``W`` for the wind (0.0046 at 8 m/s, 0.039 at 15 m/s; 0 without whitecaps or on a flat
-    sea). A plane model mixes ``(1 - W)·water + W·Lambertian(sea_foam_reflectance)``."""
+    """Mean fraction (0–1) of the sea surface covered by foam, ``F``: the whitecap coverage
+    law's ``W`` for the wind and the faint residual foam around the counted whitecaps
+    (``FoamField.mean_fraction``, 1.25 ``W``; 0 without whitecaps or on a flat sea). A plane
+    model mixes ``(1 - F)·water + F·Lambertian(sea_foam_reflectance)``."""
     sea_foam_reflectance: float = FOAM_REFLECTANCE
-    """Mean (effective) visible reflectance of that foam, a Lambertian albedo (0.22, Koepke
-    1984): the foam-weighted mean of the per-vertex foam reflectance."""
+    """Mean visible reflectance of that foam, a Lambertian albedo: the foam-weighted mean of the
+    per-vertex foam reflectance (``FoamField.mean_reflectance``, 0.185: Koepke's 0.22 over the
+    counted whitecaps, less over the residual foam)."""
     vessel_faces: dict[int, np.ndarray] = field(default_factory=dict)
     """Shape registry id of each vessel mesh → the vessel index of every face (-1: none)."""
     n_vessels: int = 0
@@ -428,6 +430,7 @@ def build_scene(
         vessel_spheres=vessel_spheres(fleet, len(geometry.vessels)),
         sea_roughness=geometry.sea_roughness,
         sea_foam_coverage=geometry.sea_foam_coverage,
+        sea_foam_reflectance=geometry.sea_foam_reflectance,
         clean_scene=clean_scene,
         vessel_materials=materials,
         vessel_paint=[part.paint for part in fleet],
