@@ -42,7 +42,7 @@ class _TrackTally:
     def add(self, z0: np.ndarray, z1: np.ndarray, d: np.ndarray, w: np.ndarray) -> None:
         """Tally flights from ``z0`` to ``z1`` along travel directions ``d`` with weights ``w``."""
         g = self.grid
-        mu_bin, phi_bin = direction_bins(d, self.sun_azimuth, g.n_mu, g.n_phi)
+        mu_bin, phi_bin = direction_bins(d, self.sun_azimuth, g.n_mu, g.n_phi, g.folded)
         dir_bin = mu_bin * g.n_phi + phi_bin
         # |μ| is floored only against division by zero: a flight within 1e-6 of horizontal has
         # probability ~1e-6 and its length in the bin is underestimated at worst.

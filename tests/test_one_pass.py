@@ -53,14 +53,16 @@ def _grey_sea(reflectance: float = 0.3, per_bin: int = 256) -> SeaReflectance:
     return SeaReflectance(wo, np.full((8, per_bin, 3), reflectance))
 
 
-@pytest.mark.parametrize("sigma", [1.3e-2, 1.0e-3])
-def test_compiled_tracer_matches_the_numpy_reference(sigma: float) -> None:
+@pytest.mark.parametrize(("sigma", "folded"), [(1.3e-2, True), (1.0e-3, True), (3e-3, False)])
+def test_compiled_tracer_matches_the_numpy_reference(sigma: float, folded: bool) -> None:
+    # Unfolded (a sky without mirror symmetry), the two bin the azimuth each their own way
+    # (drjit's signed atan2, numpy's wrapped difference) over the whole circle.
     sun, sky = _sources(np.random.default_rng(1), 20_000)
     sea = _grey_sea()
-    slab = Slab(300.0, 0.95, 0.75, 0.0, 8, 12, 6)
+    slab = Slab(300.0, 0.95, 0.75, 0.4, 8, 12, 6 if folded else 12, folded)
     compiled = [trace_fluence(sun, sky, sea, [sigma], slab, seed)[0] for seed in (1, 2)]
     reference = [
-        reference_fluence(sun, sky, sea.reflect, sigma, 0.95, 0.75, 300.0, 0.0, seed, _grid(slab))
+        reference_fluence(sun, sky, sea.reflect, sigma, 0.95, 0.75, 300.0, 0.4, seed, _grid(slab))
         for seed in (3, 4)
     ]
     # Compare per-height totals (summed over directions, per channel): their noise is small.
@@ -78,7 +80,30 @@ def test_compiled_tracer_matches_the_numpy_reference(sigma: float) -> None:
 def _grid(slab: Slab):
     from seahaze.render.diffuse_table import TableGrid
 
-    return TableGrid(slab.n_z, slab.n_mu, slab.n_phi)
+    return TableGrid(slab.n_z, slab.n_mu, slab.n_phi, slab.folded)
+
+
+def test_an_unfolded_table_folds_back_into_the_folded_one() -> None:
+    """The same photons (same seed) tallied over the whole circle of azimuths and over the
+    half folded about the sun's plane: summing each unfolded bin with its mirror image gives
+    the folded bins exactly (the tally is in fixed point), and the two halves differ where
+    the source is not symmetric."""
+    sun, sky = _sources(np.random.default_rng(4), 20_000)
+    half = 6
+    folded = trace_fluence(
+        sun, sky, _grey_sea(), [4e-3], Slab(300.0, 0.95, 0.75, 0.4, 8, 12, half), 5
+    )
+    whole = trace_fluence(
+        sun, sky, _grey_sea(), [4e-3], Slab(300.0, 0.95, 0.75, 0.4, 8, 12, 2 * half, False), 5
+    )
+    folded = folded[0].reshape(8, 12, half, 3)
+    whole = whole[0].reshape(8, 12, 2 * half, 3)
+    # Unfolded bin j covers [-π + πj/6, -π + π(j+1)/6): j ≥ 6 is folded bin j - 6, j < 6 is
+    # folded bin 5 - j.
+    np.testing.assert_allclose(
+        whole[..., half:, :] + whole[..., half - 1 :: -1, :], folded, rtol=1e-6, atol=1e-12
+    )
+    assert not np.allclose(whole[..., half:, :], whole[..., half - 1 :: -1, :], rtol=0.05)
 
 
 def test_tracer_is_deterministic_and_zero_without_sources() -> None:

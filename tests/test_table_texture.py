@@ -90,6 +90,29 @@ def test_each_lookup_is_one_texel(mitsuba_variant) -> None:
     assert np.all(np.min(np.abs(corners - value[:, None]), axis=1) < 1e-5)
 
 
+def test_an_unfolded_table_wraps_around_behind_the_sun(mitsuba_variant) -> None:
+    """Unfolded (azimuth over the whole circle, the sun at the middle), the direction away from
+    the sun lies between the last texel and the first: a lookup there picks each half the time,
+    where a folded table clamps to its edge."""
+    import drjit as dr
+    import mitsuba as mi
+
+    tables = _linear_tables()
+    texture = TableTexture(tables, LEVELS, folded=False)
+    sun_azimuth, picks = 0.3, 4096
+    away = -np.array([np.cos(sun_azimuth), np.sin(sun_azimuth), 0.0])
+    d = mi.Vector3f(*(np.full(picks, c, np.float32) for c in away))
+    u = mi.Float((np.arange(picks) + 0.5) / picks)
+    cos_sun, sin_sun = (dr.opaque(mi.Float, float(f(sun_azimuth))) for f in (np.cos, np.sin))
+    value = np.array(texture.toward(d, cos_sun, sin_sun, u)(0, mi.Float(np.full(picks, 0.5)))[0])
+    fine = texture.values.numpy().reshape(N_MU, N_PHI, N_Z * Z_UPSAMPLE, LEVELS, 4)
+    i_mu, i_z = N_MU // 2 - 1, N_Z * Z_UPSAMPLE // 2  # μ = 0 lies between two bins
+    first = fine[[i_mu, i_mu + 1], 0, i_z, 0, 0].mean()
+    last = fine[[i_mu, i_mu + 1], N_PHI - 1, i_z, 0, 0].mean()
+    assert value.mean() == pytest.approx(0.5 * (first + last), rel=1e-3)
+    assert first != pytest.approx(last)
+
+
 def test_lookup_clamps_at_the_table_edges(mitsuba_variant) -> None:
     """Beyond the outermost bin centres (straight up, the sun's own azimuth, the slab's top)
     a lookup holds the edge value, as a clamped texture does, whatever the pick."""

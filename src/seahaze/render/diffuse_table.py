@@ -30,7 +30,8 @@ Method
 Assumptions (see docs/physics.md)
     The slab is horizontally unbounded, the sea is flat with the microfacet roughness of the
     sea material (resolved waves are ignored), vessels neither shadow nor reflect the diffuse
-    field, the sky is symmetric about the sun's vertical plane (azimuths are folded).
+    field, and the sky is symmetric about the sun's vertical plane (azimuths are folded) unless
+    the grid says it is not (:attr:`TableGrid.folded`: a broken-cloud sky).
 """
 
 from __future__ import annotations
@@ -49,11 +50,14 @@ from .photon_tracer import SeaReflectance, Slab, trace_fluence
 @dataclass(frozen=True)
 class TableGrid:
     """Bins of the table: heights over ``[0, top]``, ``μ = cos`` zenith over ``[−1, 1]`` and the
-    azimuth from the sun folded into ``[0, π]``. Values sit at bin centres."""
+    azimuth from the sun folded into ``[0, π]`` — or, with ``folded`` False, over ``[−π, π)``
+    for a sky that is not symmetric about the sun's vertical plane. Values sit at bin
+    centres."""
 
     n_z: int = 32
     n_mu: int = 48
     n_phi: int = 24
+    folded: bool = True
 
     @property
     def n_dir(self) -> int:
@@ -61,6 +65,10 @@ class TableGrid:
 
 
 DEFAULT_GRID = TableGrid()
+
+UNFOLDED_GRID = TableGrid(n_phi=2 * DEFAULT_GRID.n_phi, folded=False)
+"""The grid of a sky with no mirror symmetry (broken cloud): the whole circle of azimuths at
+the default grid's bin width."""
 
 
 @dataclass
@@ -71,23 +79,26 @@ class DiffuseTable:
     top_m: float
     sun_azimuth_rad: float
     photons: int
+    folded: bool = True
 
     def lookup(self, z: np.ndarray, directions: np.ndarray) -> np.ndarray:
         """Nearest-bin values for heights (m) and travel directions (n, 3) — for tests."""
         n_z, n_mu, n_phi, _ = self.values.shape
         iz = np.clip((np.asarray(z) / self.top_m * n_z).astype(int), 0, n_z - 1)
-        imu, iphi = direction_bins(directions, self.sun_azimuth_rad, n_mu, n_phi)
+        imu, iphi = direction_bins(directions, self.sun_azimuth_rad, n_mu, n_phi, self.folded)
         return self.values[iz, imu, iphi]
 
 
 def direction_bins(
-    d: np.ndarray, sun_azimuth: float, n_mu: int, n_phi: int
+    d: np.ndarray, sun_azimuth: float, n_mu: int, n_phi: int, folded: bool = True
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(μ bin, folded azimuth bin) of unit travel directions ``d`` (n, 3)."""
+    """(μ bin, azimuth bin) of unit travel directions ``d`` (n, 3); the azimuth from the sun
+    folded into ``[0, π]``, or with ``folded`` False over ``[−π, π)``."""
     mu_bin = np.clip(((d[:, 2] + 1.0) * 0.5 * n_mu).astype(np.int64), 0, n_mu - 1)
     # Azimuth from the sun wrapped into [-π, π), then folded into [0, π].
-    phi = np.abs((np.arctan2(d[:, 1], d[:, 0]) - sun_azimuth + np.pi) % (2.0 * np.pi) - np.pi)
-    phi_bin = np.clip((phi / np.pi * n_phi).astype(np.int64), 0, n_phi - 1)
+    signed = (np.arctan2(d[:, 1], d[:, 0]) - sun_azimuth + np.pi) % (2.0 * np.pi) - np.pi
+    fraction = np.abs(signed) / np.pi if folded else (signed + np.pi) / (2.0 * np.pi)
+    phi_bin = np.clip((fraction * n_phi).astype(np.int64), 0, n_phi - 1)
     return mu_bin, phi_bin
 
 
@@ -96,7 +107,8 @@ def _bin_directions(grid: TableGrid, sub: int, mirror: bool) -> np.ndarray:
     shape (n_mu, n_phi, points, 3); with ``mirror`` the points at ``−φ`` are added."""
     offsets = (np.arange(sub) + 0.5) / sub
     mu = (-1.0 + 2.0 * (np.arange(grid.n_mu)[:, None] + offsets[None, :]) / grid.n_mu).ravel()
-    phi = (np.pi * (np.arange(grid.n_phi)[:, None] + offsets[None, :]) / grid.n_phi).ravel()
+    cells = (np.arange(grid.n_phi)[:, None] + offsets[None, :]) / grid.n_phi
+    phi = (np.pi * cells if grid.folded else 2.0 * np.pi * cells - np.pi).ravel()
     mu = mu.reshape(grid.n_mu, sub)[:, None, :, None]
     phi = phi.reshape(grid.n_phi, sub)[None, :, None, :]
     phis = np.concatenate([phi, -phi], axis=-1) if mirror else phi
@@ -111,7 +123,7 @@ def phase_matrix(g: float, grid: TableGrid = DEFAULT_GRID, sub: int = 4) -> np.n
     bin ``node``, averaged over the bin (and its mirror azimuth), rows summing to 1 over the
     bins' solid angles. Depends only on ``g`` and the grid, so it is cached across levels."""
     centres = _bin_directions(grid, 1, mirror=False).reshape(grid.n_dir, 3)
-    points = _bin_directions(grid, sub, mirror=True).reshape(grid.n_dir, -1, 3)
+    points = _bin_directions(grid, sub, mirror=grid.folded).reshape(grid.n_dir, -1, 3)
     p = np.empty((grid.n_dir, grid.n_dir))
     for j in range(grid.n_dir):
         p[:, j] = hg_phase(centres @ points[j].T, g).mean(axis=1)
@@ -150,12 +162,14 @@ def build_tables(
     if any(x <= 0.0 for x in sigmas):
         raise ValueError(f"the diffuse table needs haze (sigma > 0), got {sigmas}")
     sun, sky = _downward(*sun), _downward(*sky)
-    slab = Slab(top_m, albedo, g, sun_azimuth_rad, grid.n_z, grid.n_mu, grid.n_phi)
+    slab = Slab(top_m, albedo, g, sun_azimuth_rad, grid.n_z, grid.n_mu, grid.n_phi, grid.folded)
     fluence = trace_fluence(sun, sky, sea, sigmas, slab, seed)
     p = phase_matrix(float(g), grid)
     photons = len(sun[0]) + len(sky[0])
     return [
-        DiffuseTable(_in_scattered(phi, p, sigma, albedo, grid), top_m, sun_azimuth_rad, photons)
+        DiffuseTable(
+            _in_scattered(phi, p, sigma, albedo, grid), top_m, sun_azimuth_rad, photons, grid.folded
+        )
         for phi, sigma in zip(fluence, sigmas, strict=True)
     ]
 

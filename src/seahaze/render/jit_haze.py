@@ -57,6 +57,21 @@ def rotate_directions(d: tuple[Any, Any, Any], cos_theta: Any, phi: Any) -> tupl
     return ox * norm, oy * norm, oz * norm
 
 
+def azimuth_fraction(x: Any, y: Any, cos_sun: Any, sin_sun: Any, folded: bool = True) -> Any:
+    """Where horizontal direction ``(x, y)`` lies on a table's azimuth axis, in ``[0, 1]``:
+    folded (:func:`folded_azimuth` over ``π``) for a sky symmetric about the sun's vertical
+    plane; else the signed azimuth from the sun, ``[−π, π)`` mapped onto ``[0, 1)`` (the sun
+    at ½), for a sky that is not (broken cloud). As
+    :func:`seahaze.render.diffuse_table.direction_bins`."""
+    import drjit as dr
+
+    if folded:
+        return folded_azimuth(x, y, cos_sun, sin_sun) / dr.pi
+    along = x * cos_sun + y * sin_sun
+    across = y * cos_sun - x * sin_sun
+    return (dr.atan2(across, along) + dr.pi) * (0.5 / dr.pi)
+
+
 def folded_azimuth(x: Any, y: Any, cos_sun: Any, sin_sun: Any) -> Any:
     """Azimuth (rad, in ``[0, π]``) of horizontal direction ``(x, y)`` from the sun's azimuth
     (given by its cosine and sine), folded: the sky is symmetric about the sun's vertical

@@ -55,13 +55,15 @@ class PassLevels:
         g: float,
         tables: np.ndarray,
         sun_azimuth_rad: float,
+        folded: bool = True,
     ) -> None:
         """Point the kernels at a set of levels without changing them.
 
         ``sigma`` (L, 3) extinction per level and channel (1/m, > 0), ``mixture`` (L,) the
         distance-sampling weights (sum 1), ``albedo`` and ``g`` the medium's, ``tables``
         (n_z, n_mu, n_phi, 3L) the diffuse in-scattering of every level, channels
-        ``3k..3k+2`` for level ``k``; ``sun_azimuth_rad`` orients the tables' azimuth.
+        ``3k..3k+2`` for level ``k``; ``sun_azimuth_rad`` orients the tables' azimuth, which
+        ``folded`` says is folded about the sun's vertical plane (or spans the whole circle).
         """
         import drjit as dr
         import mitsuba as mi
@@ -85,7 +87,7 @@ class PassLevels:
         self.mix_bounds = [opaque(b) for b in np.cumsum(weights)[:-1]]
         self.albedo, self.g = opaque(albedo), opaque(g)
         self.sun_cos_az, self.sun_sin_az = (opaque(f(sun_azimuth_rad)) for f in (np.cos, np.sin))
-        self.table = TableTexture(tables, self.n_levels)
+        self.table = TableTexture(tables, self.n_levels, folded)
 
     # -- where the medium is along a ray ----------------------------------------------------
     def segment(self, p: Any, d: Any, t_end: Any = None) -> tuple[Any, Any]:

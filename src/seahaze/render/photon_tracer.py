@@ -101,6 +101,9 @@ class Slab:
     n_z: int
     n_mu: int
     n_phi: int
+    folded: bool = True
+    """Azimuths folded about the sun's vertical plane (``n_phi`` bins over ``[0, π]``), or not
+    (over ``[−π, π)``: a sky that is not symmetric)."""
 
     @property
     def n_dir(self) -> int:
@@ -311,8 +314,8 @@ def _tally(tally, base, z0, z1, d, w, active, params: _Params) -> None:
     slab = params.slab
     dx, dy, dz = d
     mu_bin = mi.UInt32(dr.clip(mi.Int32((dz + 1.0) * 0.5 * slab.n_mu), 0, slab.n_mu - 1))
-    phi = jit_haze.folded_azimuth(dx, dy, params.cos_sun, params.sin_sun)
-    phi_bin = mi.UInt32(dr.clip(mi.Int32(phi / dr.pi * slab.n_phi), 0, slab.n_phi - 1))
+    phi = jit_haze.azimuth_fraction(dx, dy, params.cos_sun, params.sin_sun, slab.folded)
+    phi_bin = mi.UInt32(dr.clip(mi.Int32(phi * slab.n_phi), 0, slab.n_phi - 1))
     dir_bin = mu_bin * slab.n_phi + phi_bin
     inv_mu = 1.0 / dr.maximum(dr.abs(dz), MU_FLOOR)
     for end, sign in ((dr.maximum(z0, z1), 1.0), (dr.minimum(z0, z1), -1.0)):

@@ -51,16 +51,20 @@ def upsampled_tables(tables: np.ndarray, n_levels: int) -> np.ndarray:
     return packed
 
 
-def _linear_taps(u: Any, n: int) -> list[tuple[Any, Any]]:
+def _linear_taps(u: Any, n: int, periodic: bool = False) -> list[tuple[Any, Any]]:
     """The two texels and weights of linear interpolation at coordinate ``u`` in ``[0, 1]`` of
-    an ``n``-texel axis with clamped edges (texel centres at ``(i + 0.5)/n``, as drjit's
-    textures)."""
+    an ``n``-texel axis with clamped edges, or wrapped ones if ``periodic`` (texel centres at
+    ``(i + 0.5)/n``, as drjit's textures)."""
     import drjit as dr
     import mitsuba as mi
 
     x = u * n - 0.5
     i0 = dr.floor(x)
     f = x - i0
+    if periodic:  # an unfolded azimuth: the last texel's neighbour is the first
+        low = mi.UInt32(dr.select(i0 < 0.0, i0 + n, dr.minimum(i0, n - 1)))
+        high = mi.UInt32(dr.select(i0 + 1.0 >= n, i0 + 1.0 - n, dr.maximum(i0 + 1.0, 0.0)))
+        return [(low, 1.0 - f), (high, f)]
     low = mi.UInt32(dr.clip(i0, 0, n - 1))
     high = mi.UInt32(dr.clip(i0 + 1.0, 0, n - 1))
     return [(low, 1.0 - f), (high, f)]
@@ -69,10 +73,12 @@ def _linear_taps(u: Any, n: int) -> list[tuple[Any, Any]]:
 class TableTexture:
     """Every level's table of one pass, uploaded for the integrator's kernel."""
 
-    def __init__(self, tables: np.ndarray, n_levels: int) -> None:
-        """``tables`` (n_z, n_mu, n_phi, 3L): channels ``3k..3k+2`` are level ``k``'s RGB."""
+    def __init__(self, tables: np.ndarray, n_levels: int, folded: bool = True) -> None:
+        """``tables`` (n_z, n_mu, n_phi, 3L): channels ``3k..3k+2`` are level ``k``'s RGB;
+        ``folded``: their azimuths folded about the sun's vertical plane, or not
+        (:class:`seahaze.render.diffuse_table.TableGrid`)."""
         fine = upsampled_tables(tables, n_levels)
-        self.n_levels = n_levels
+        self.n_levels, self.folded = n_levels, folded
         self.grid = fine.shape[0:3]  # (n_mu, n_phi, n_z fine)
         self.values = jit_haze.owned_floats(fine)
 
@@ -85,9 +91,9 @@ class TableTexture:
         import mitsuba as mi
 
         n_mu, n_phi, n_z = self.grid
-        phi = jit_haze.folded_azimuth(travel.x, travel.y, cos_sun, sin_sun)
+        phi = jit_haze.azimuth_fraction(travel.x, travel.y, cos_sun, sin_sun, self.folded)
         i_mu, u = _pick_tap(_linear_taps((travel.z + 1.0) * 0.5, n_mu), u)
-        i_phi, _ = _pick_tap(_linear_taps(phi / dr.pi, n_phi), u)
+        i_phi, _ = _pick_tap(_linear_taps(phi, n_phi, not self.folded), u)
         offset = (i_mu * n_phi + i_phi) * n_z
 
         def lookup(level: int, height: Any) -> Any:
