@@ -1,8 +1,9 @@
 """Render the gallery of skies: docs/images/sky_gallery.png.
 
-The default scene (``scenes/default.yaml``) under three skies: clear with the sun at 28° (the
-scene as written), clear with a low sun at 5° (dawn or dusk light), and overcast
-(``sky.model: overcast``, ``scenes/overcast.yaml``'s sky). Each row holds the clean image and
+The default scene (``scenes/default.yaml``) under four skies: clear with the sun at 28° (the
+scene as written), clear with a low sun at 5° (dawn or dusk light), broken cloud
+(``sky.model: broken``, ``scenes/broken_cloud.yaml``'s sky) and overcast (``sky.model:
+overcast``, ``scenes/overcast.yaml``'s sky). Each row holds the clean image and
 the levels 2000 m and 500 m, rendered in the ``physical`` mode through
 :func:`seahaze.render.engine.render_scene` and shown at the scene's own exposure, as the
 dataset's PNGs are. Deterministic: fixed seeds, the same pixels on the same machine and Mitsuba
@@ -27,6 +28,9 @@ LEVELS_M = (2000.0, 500.0)
 SKIES = {
     "clear, sun at 28°": {},
     "clear, sun at 5°": {"sun": {"elevation_deg": 5.0}},
+    "broken cloud, 5 oktas": {
+        "sky": {"model": "broken", "clouds": {"oktas": 5, "base_height_m": 900}}
+    },
     "overcast": {"sky": {"model": "overcast"}},
 }
 """Each row's changes to the default scene."""

@@ -52,13 +52,14 @@ def sky_irradiance(image: np.ndarray) -> float:
     return float(np.sum(image[upper, :, 0].sum(axis=1) * weight[upper]))
 
 
-@pytest.mark.parametrize("oktas", [2, 5, 7])
+@pytest.mark.parametrize("oktas", [2, 6])
 def test_the_broken_sky_averages_kasten_and_czeplaks_irradiance(oktas):
     # A grey clear sky of radiance L and a sun of beam E_b at 40°: G_clear = πL + E_b sin 40°.
     # Over many cloud layers (and suns all over the sky), the mean global irradiance of the
     # broken sky, by quadrature of its image plus the sun's beam it lets through, must be
-    # Kasten & Czeplak's share of G_clear.
-    rows, columns, clear_radiance, beam = 97, 192, 0.1, 3.0
+    # Kasten & Czeplak's share of G_clear. Small clouds (150 m at 1000 m) put many in every
+    # sky; the mean of 32 layers then has a standard error of about 1.2 % (measured).
+    rows, columns, clear_radiance, beam = 129, 256, 0.1, 3.0
     elevation = math.radians(40.0)
     g_clear = math.pi * clear_radiance + beam * math.sin(elevation)
     deck = overcast.zenith_radiance(np.full(3, g_clear))
@@ -72,10 +73,10 @@ def test_the_broken_sky_averages_kasten_and_czeplaks_irradiance(oktas):
         ]
     )
     totals = []
-    for seed in range(24):
-        cloudy = layer(oktas, seed)
-        sky = sky_irradiance(clouds.broken_sky_radiance(clear, deck, cloudy))
-        passed = np.mean([cloudy.sun_transmission(s) for s in suns])
+    for seed in range(100, 132):
+        cloudy = clouds.CloudLayer(oktas, base_m=1000.0, size_m=150.0, seed=seed)
+        sky = sky_irradiance(clouds.broken_sky_radiance(clear, deck, cloudy, turbidity=3.0))
+        passed = 1.0 - cloudy.cover(suns).mean()
         totals.append(sky + passed * beam * math.sin(elevation))
     expected = overcast.cloud_transmission(oktas) * g_clear
     assert np.mean(totals) == pytest.approx(expected, rel=0.04)
@@ -86,7 +87,7 @@ def test_clouds_are_grey_and_brightest_at_their_thin_edges():
     clear = np.zeros((rows, columns, 3))
     clear[..., 2] = 1.0  # a pure blue clear sky marks where there is no cloud
     cloudy = layer(5)
-    image = clouds.broken_sky_radiance(clear, 2.0, cloudy)
+    image = clouds.broken_sky_radiance(clear, 2.0, cloudy, turbidity=3.0)
     cover, shade = cloudy.latlong_cover(rows, columns)
     solid = cover > 0.999
     np.testing.assert_allclose(image[solid][:, 0], image[solid][:, 1], rtol=1e-6)
@@ -96,6 +97,27 @@ def test_clouds_are_grey_and_brightest_at_their_thin_edges():
     inside = solid[: rows // 3]
     edge = inside & ~np.roll(inside, 2, axis=0) | inside & ~np.roll(inside, -2, axis=0)
     assert shade[: rows // 3][edge].mean() > 1.2 * shade[: rows // 3][inside & ~edge].mean()
+
+
+def test_clouds_fade_into_the_sky_through_the_air_below_them():
+    # Overhead, the air up to a high layer in pure air (T = 1) is the Rayleigh atmosphere's:
+    # exp(-0.097) at 550 nm (Bucholtz 1995); a turbid day's aerosol adds (T - 1) times that,
+    # mostly below 1.2 km; toward the horizon the path grows as 1/μ.
+    assert clouds.air_transmittance(1.0, 1e6, 1.0) == pytest.approx(math.exp(-0.097), rel=1e-6)
+    low = clouds.air_transmittance(1.0, 1000.0, 3.0)
+    expected = 0.097 * ((1 - math.exp(-1000 / 8400)) + 2 * (1 - math.exp(-1000 / 1200)))
+    assert low == pytest.approx(math.exp(-expected), rel=1e-9)
+    assert clouds.air_transmittance(0.1, 1000.0, 3.0) == pytest.approx(low**10, rel=1e-9)
+    assert clouds.air_transmittance(0.0, 1000.0, 3.0) == 0.0
+    # In the sky's image a cloud's contrast against the clear sky fades toward the horizon:
+    # overhead the clouds stand out, 1° above the horizon (1/μ = 57) they are all but gone.
+    rows, columns = 1025, 64
+    clear = np.full((rows, columns, 3), 0.5)
+    image = clouds.broken_sky_radiance(clear, 2.0, layer(7), turbidity=3.0)
+    contrast = np.abs(image[..., 0] - 0.5).max(axis=1) / 0.5
+    assert contrast[:200].max() > 1.0
+    one_degree_up = round((89.0 / 180.0) * (rows - 1))
+    assert contrast[one_degree_up] < 0.01
 
 
 def test_far_toward_the_horizon_the_cover_is_its_mean():
@@ -175,9 +197,11 @@ def test_a_broken_cloud_scene_renders_clouds_and_blue_sky(mitsuba_variant):
         assert np.all(np.isfinite(clean)) and np.all(np.isfinite(levels[0].radiance))
         sky = np.isinf(session.pixels.distance_m)
         sky[sky.shape[0] // 4 :] = False
+        # Clear sky is deep blue (B/R about 2.5 in linear RGB); a cloud is grey, a little blue
+        # from the air in front of it.
         rgb = clean[sky]
-        grey = np.abs(rgb[:, 0] / rgb[:, 2] - 1.0) < 0.02
-        blue = rgb[:, 2] > 1.3 * rgb[:, 0]
+        ratio = rgb[:, 2] / rgb[:, 0]
+        grey, blue = ratio < 1.4, ratio > 1.8
         assert grey.mean() > 0.1 and blue.mean() > 0.1, (mode, grey.mean(), blue.mean())
 
 

@@ -51,6 +51,23 @@ How bright (Kasten & Czeplak 1980)
     Rev.* 64, 189–241), divided by its mean over the layer's cloud, so that the mean stays
     ``b(N)`` and the irradiance above holds.
 
+Aerial perspective (Preetham, Shirley & Smits 1999)
+    Between the sea and a cloud lies clear air: a distant cloud near the horizon fades into the
+    horizon's sky, as it does in a photograph. Its optical depth along a slant path of zenith
+    cosine ``μ`` up to the base ``H`` is ``τ(H)/μ``, with the vertical
+
+        τ(H) = τ_m·(1 − e^(−H/H_m)) + (T − 1)·τ_m·(1 − e^(−H/H_h)),
+
+    the molecules' share (``τ_m = 0.097`` at 550 nm from sea level, Bucholtz, A. (1995).
+    Rayleigh-scattering calculations for the terrestrial atmosphere. *Appl. Opt.* 34(15),
+    2765–2773; scale height ``H_m = 8.4`` km) and the aerosol's, which the sky's turbidity
+    ``T = (τ_m + τ_h)/τ_m`` sets (Preetham, A. J., Shirley, P. & Smits, B. (1999). A practical
+    analytic model for daylight. *SIGGRAPH '99*, 91–100; haze scale height ``H_h = 1.2`` km).
+    A cloud is seen as ``t·L_cloud + (1 − t)·L_clear`` with ``t = exp(−τ(H)/μ)``: the clear
+    sky's radiance in that direction stands in for the light the air between scatters toward
+    the camera (near the horizon it is that path's own light; overhead, where ``t`` is near 1,
+    the stand-in hardly matters).
+
 Limits: the clouds are flat (no sides or tops; near the horizon a real layer closes up more
 than its cover), cast no shadows (the sun is out or in for the whole scene), have no bright
 sunlit rims, and do not move in a sequence.
@@ -88,6 +105,9 @@ CORE_OPTICAL_DEPTH = 40.0
 CLOUD_ASYMMETRY = 0.85
 """Henyey–Greenstein ``g`` of cloud droplets in the visible."""
 
+EDGE_WIDTHS = np.geomspace(EDGE_HALF_WIDTH, 1.0, 16)
+"""Half-widths of the widened (anti-aliased) edge at which the cut is tabulated."""
+
 CUT_SAMPLES = 512
 """Samples per side of the square (:data:`CUT_SPAN` lattice spacings) over which the noise's
 distribution is tabulated to place the cut that leaves ``N/8`` covered."""
@@ -96,14 +116,22 @@ CUT_SPAN = 64.0
 """Side of that square in largest-octave lattice spacings."""
 
 
-def cloud_brightness(oktas: float) -> float:
+def cloud_brightness(oktas: float, deck_seen: float = 1.0, clear_lost: float = 0.0) -> float:
     """``b(N)``: a cloud's radiance over the full deck's (module docstring), for ``0 < oktas
-    ≤ 8``; 4 as ``N → 0``, 1 at ``N = 8``."""
+    ≤ 8``; without air between (the defaults) 4 as ``N → 0``, 1 at ``N = 8``.
+
+    Through the air below the layer ("Aerial perspective"), the clouds' light reaching the sea
+    is ``deck_seen`` (``∫ t D cos θ dω / ∫ D cos θ dω``, ``D`` the deck's gradation) of theirs,
+    and a cloud direction brings ``(1 − t)`` of the clear sky's light instead, in all
+    ``clear_lost`` of ``G_clear`` over the sky (``∫ (1 − t) L_clear cos θ dω / G_clear``): so
+    that the mean global irradiance still is Kasten & Czeplak's,
+    ``b = (T(N) − (1 − N/8) − (N/8)·clear_lost) / ((N/8)·T(8)·deck_seen)``."""
     share = _share(oktas)
     if share == 0.0:
         raise ValueError("a sky without cloud has no cloud brightness")
     full_deck = cloud_transmission(FULL_DECK_OKTAS)
-    return (cloud_transmission(oktas) - (1.0 - share)) / (share * full_deck)
+    gained = cloud_transmission(oktas) - (1.0 - share) - share * clear_lost
+    return gained / (share * full_deck * deck_seen)
 
 
 def _share(oktas: float) -> float:
@@ -154,7 +182,8 @@ class CloudLayer:
         across = 0.5 * np.abs(np.roll(noise, -1, axis=1) - np.roll(noise, 1, axis=1))
         along = np.abs(np.gradient(noise, axis=0)) if up_rows > 1 else 0.0
         half_width = np.maximum(EDGE_HALF_WIDTH, across + along)
-        cover[:up_rows] = self._blend(_soft_cut(noise, self._cut, half_width), resolved)
+        cut = self._cut_at(half_width)
+        cover[:up_rows] = self._blend(_soft_cut(noise, cut, half_width), resolved)
         shade[:up_rows] = resolved * self._shade(noise) + (1.0 - resolved)
         return cover, shade
 
@@ -227,19 +256,33 @@ class CloudLayer:
         noise, _ = self._noise(x, y, 0.0)
         return noise, float(np.quantile(noise, 0.99))
 
-    @cached_property
+    @property
     def _cut(self) -> float:
-        """The noise level above which the layer is cloud, set so that the mean soft cover of
-        a large square of the layer is ``N/8``."""
-        noise = self._tabulated[0]
-        low, high = float(noise.min()) - EDGE_HALF_WIDTH, float(noise.max()) + EDGE_HALF_WIDTH
-        for _ in range(60):  # bisection: the mean cover falls as the cut rises
-            middle = 0.5 * (low + high)
-            if np.mean(_soft_cut(noise, middle, EDGE_HALF_WIDTH)) > self.share:
-                low = middle
-            else:
-                high = middle
-        return 0.5 * (low + high)
+        """The noise level above which the layer is cloud, with the sharp edge: the mean soft
+        cover of a large square of the layer is ``N/8``."""
+        return float(self._cuts[0])
+
+    def _cut_at(self, half_width: np.ndarray) -> np.ndarray:
+        """The cut for an edge widened to ``half_width`` (anti-aliasing): set for every width
+        so that the mean cover stays ``N/8`` (a wider ramp over a cut in the noise's tail would
+        otherwise add cover to a few-okta sky and take it from an almost overcast one)."""
+        return np.interp(np.log(half_width), np.log(EDGE_WIDTHS), self._cuts)
+
+    @cached_property
+    def _cuts(self) -> np.ndarray:
+        """The cut of each of :data:`EDGE_WIDTHS` on the tabulated noise (bisection)."""
+        noise = self._tabulated[0][::2, ::2]  # 256² points: the cut's error is the layer's own
+        cuts = []
+        for width in EDGE_WIDTHS:
+            low, high = float(noise.min()) - width, float(noise.max()) + width
+            for _ in range(40):  # the mean cover falls as the cut rises
+                middle = 0.5 * (low + high)
+                if np.mean(_soft_cut(noise, middle, width)) > self.share:
+                    low = middle
+                else:
+                    high = middle
+            cuts.append(0.5 * (low + high))
+        return np.array(cuts)
 
 
 def _transmission(optical_depth: np.ndarray) -> np.ndarray:
@@ -273,15 +316,58 @@ def latlong_directions(rows: int, columns: int) -> np.ndarray:
     return np.stack(np.broadcast_arrays(sin_t * np.sin(phi), sin_t * np.cos(phi), cos_t), axis=-1)
 
 
-def broken_sky_radiance(clear: np.ndarray, deck_zenith: float, layer: CloudLayer) -> np.ndarray:
+def broken_sky_radiance(
+    clear: np.ndarray, deck_zenith: float, layer: CloudLayer, turbidity: float
+) -> np.ndarray:
     """The broken sky as a latitude–longitude image: the clear sky's radiance ``clear`` (rows
     × columns × 3, laid out as :func:`latlong_directions`) where there is no cloud, and where
-    there is, ``b(N)`` times the full deck's ``deck_zenith·(1 + 2 cos θ)/3`` (grey), mixed by
-    the cover (:meth:`CloudLayer.latlong_cover`)."""
-    from .overcast import gradation
+    there is, ``b(N)`` times the full deck's ``deck_zenith·(1 + 2 cos θ)/3`` (grey), seen
+    through the air below the layer of the sky's ``turbidity`` (:func:`air_transmittance`),
+    mixed by the cover (:meth:`CloudLayer.latlong_cover`)."""
+    from .overcast import HORIZONTAL_IRRADIANCE_PER_ZENITH_RADIANCE, REC709_LUMINANCE, gradation
 
     rows, columns = clear.shape[:2]
-    cos_zenith = np.cos(math.pi * np.arange(rows) / (rows - 1))[:, None, None]
+    mu = np.cos(math.pi * np.arange(rows) / (rows - 1))
+    t = air_transmittance(mu, layer.base_m, turbidity)
+    # Irradiance weights of the rows (midpoint rule in θ over the upper hemisphere), and the
+    # clear day's global luminance the deck was scaled from (overcast.zenith_radiance).
+    weight = np.where(mu > 0.0, mu * np.sqrt(1.0 - mu * mu), 0.0) * (math.pi / (rows - 1))
+    deck = gradation(mu)
+    clear_row = (np.asarray(clear, np.float64) @ REC709_LUMINANCE).mean(axis=1) * 2.0 * math.pi
+    g_clear = (
+        deck_zenith
+        * HORIZONTAL_IRRADIANCE_PER_ZENITH_RADIANCE
+        / cloud_transmission(FULL_DECK_OKTAS)
+    )
+    brightness = cloud_brightness(
+        layer.oktas,
+        deck_seen=float(np.sum(weight * t * deck) / np.sum(weight * deck)),
+        clear_lost=float(np.sum(weight * (1.0 - t) * clear_row)) / g_clear if g_clear else 0.0,
+    )
     cover, shade = (a[..., None] for a in layer.latlong_cover(rows, columns))
-    cloud = cloud_brightness(layer.oktas) * deck_zenith * gradation(cos_zenith) * shade
-    return ((1.0 - cover) * clear + cover * cloud).astype(np.float32)
+    cloud = brightness * deck_zenith * deck[:, None, None] * shade
+    seen = t[:, None, None]
+    return (clear + cover * seen * (cloud - clear)).astype(np.float32)
+
+
+MOLECULAR_OPTICAL_DEPTH = 0.097
+"""Rayleigh optical depth of the whole atmosphere above sea level at 550 nm (Bucholtz 1995)."""
+
+MOLECULAR_SCALE_HEIGHT_M = 8400.0
+"""Scale height of the air's molecules (m)."""
+
+AEROSOL_SCALE_HEIGHT_M = 1200.0
+"""Scale height of the aerosol haze (m; Preetham et al. 1999)."""
+
+
+def air_transmittance(cos_zenith: np.ndarray, height_m: float, turbidity: float) -> np.ndarray:
+    """Transmittance ``exp(−τ(H)/μ)`` of the clear air from the sea up to ``height_m`` (m)
+    along directions of zenith cosine ``cos_zenith`` (module docstring, "Aerial
+    perspective"); 0 at and below the horizon."""
+    tau = MOLECULAR_OPTICAL_DEPTH * (
+        -np.expm1(-height_m / MOLECULAR_SCALE_HEIGHT_M)
+        + (turbidity - 1.0) * -np.expm1(-height_m / AEROSOL_SCALE_HEIGHT_M)
+    )
+    mu = np.asarray(cos_zenith, np.float64)
+    with np.errstate(divide="ignore", over="ignore"):
+        return np.where(mu > 0.0, np.exp(-tau / np.where(mu > 0.0, mu, 1.0)), 0.0)

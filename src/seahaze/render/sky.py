@@ -142,7 +142,7 @@ def _broken_image(sun: SunSpec, sky: SkySpec, layer: clouds.CloudLayer) -> np.nd
             sun.elevation_deg, sun.azimuth_deg, sky.turbidity, sky.ground_albedo
         )
     )
-    image = clouds.broken_sky_radiance(clear, zenith * sky.scale, layer)
+    image = clouds.broken_sky_radiance(clear, zenith * sky.scale, layer, sky.turbidity)
     return image
 
 
