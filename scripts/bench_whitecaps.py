@@ -267,9 +267,15 @@ def _table(rows: list[dict], before: dict[float, dict]) -> list[str]:
         rule += "---|---|"
     head += (
         f" rendered | ratio | seeds' range | at {low:g}× | at {high:g}× |"
-        " sea pixels > 2.5× median | threshold as foam reflectance | foam ≥ 0.059 | ratio |"
+        " sea pixels > 2.5× median | threshold as foam reflectance |"
     )
-    rule += "---|---|---|---|---|---|---|---|---|"
+    rule += "---|---|---|---|---|---|---|"
+    calibrated = any("coverage_koepke" in r for r in before.values())
+    if calibrated:
+        head += " before: foam ≥ 0.059 | ratio |"
+        rule += "---|---|"
+    head += " foam ≥ 0.059 | ratio |"
+    rule += "---|---|"
     lines = [head, rule]
     for row in rows:
         law = row["law"]
@@ -285,13 +291,18 @@ def _table(rows: list[dict], before: dict[float, dict]) -> list[str]:
             f" {100 * row[f'coverage_{low:g}']:.2f} % | {100 * row[f'coverage_{high:g}']:.2f} % |"
             f" {100 * row['global']:.2f} % |"
         )
+        line += f" {row['threshold_reflectance']:.3f} |" if "coverage_koepke" in row else " |"
+        if calibrated:
+            if old is not None and "coverage_koepke" in old:
+                koepke = old["coverage_koepke"]
+                line += f" {100 * koepke:.2f} % | {koepke / law:.2f} |"
+            else:
+                line += " | |"
         if "coverage_koepke" in row:
-            line += (
-                f" {row['threshold_reflectance']:.3f} | {100 * row['coverage_koepke']:.2f} % |"
-                f" {row['coverage_koepke'] / law:.2f} |"
-            )
+            koepke = row["coverage_koepke"]
+            line += f" {100 * koepke:.2f} % | {koepke / law:.2f} |"
         else:
-            line += " | | |"
+            line += " | |"
         lines.append(line)
     return lines
 
@@ -306,7 +317,9 @@ def write_section(rows: list[dict], before: dict[float, dict], res: tuple[int, i
         f"Machine: {platform.machine()}, {len(os.sched_getaffinity(0))} vCPU; "
         f"headings {', '.join(f'{h:g}°' for h in HEADINGS_DEG)}; whitecap: luminance above "
         f"{THRESHOLD_RATIO:g}× the row's water median, pixels at most {FOOTPRINT_M:g} m along "
-        f"the range, weighted by area (sea area measured per wind: {area} m²).",
+        f"the range, weighted by area (sea area measured per wind: {area} m²); foam ≥ 0.059: "
+        "the rendered foam albedo, from a white-sea and a black-foam render of each view, at "
+        "least Koepke's faintest counted whitecap.",
         "",
         *_table(rows, before),
     ]
