@@ -37,7 +37,9 @@ NOISE_ONLY = {"psf_sigma_px": 0.0}
 
 
 def _settings(**fields) -> CameraModelSpec:
-    return CameraModelSpec.model_validate(fields)
+    # White balance off unless a test asks for it: the other steps' expected values are the
+    # renderer's own colours.
+    return CameraModelSpec.model_validate({"white_balance": "off", **fields})
 
 
 def _code_position(linear: np.ndarray) -> np.ndarray:
@@ -237,7 +239,7 @@ def test_existing_seed_streams_keep_their_values() -> None:
     expected = np.random.SeedSequence([7, 13, key("default"), key("v0300")])
     got = dither_seed(7, "default", "v0300")
     np.testing.assert_array_equal(got.generate_state(8), expected.generate_state(8))
-    assert [int(s) for s in Stream][:-1] == [1, 2, 3, 4, 11, 12, 13, 14]
+    assert [int(s) for s in Stream] == [1, 2, 3, 4, 11, 12, 13, 14, 15, 16]
     camera = np.random.SeedSequence([7, int(Stream.CAMERA_NOISE), key("default")])
     np.testing.assert_array_equal(
         camera_noise_seed(7, "default").generate_state(8), camera.generate_state(8)
@@ -309,9 +311,12 @@ def test_camera_model_field_defaults_and_record() -> None:
     assert settings == CameraModelSpec()
     recorded = spec.model_dump(mode="json")["render"]["camera_model"]
     assert recorded == settings.model_dump(mode="json")
-    meta = camera_model.camera_model_meta(settings, 9)
+    meta = camera_model.camera_model_meta(settings, 9, np.array([2.0, 1.0, 0.5]))
     assert meta["camera_model"]["noise_seed"] == 9
+    assert meta["camera_model"]["white_balance_gains"] == [0.5, 1.0, 2.0]
     assert camera_model.settings_from_meta(meta) == settings
+    with pytest.raises(ValueError, match="scene's light"):
+        camera_model.camera_model_meta(settings, 9)
 
 
 BAD_CAMERAS = [
@@ -378,3 +383,60 @@ def test_rendered_camera_model_changes_only_the_pngs(tmp_path) -> None:
                 np.testing.assert_array_equal(
                     png, imaging.to_srgb8(radiance, meta["exposure"], dither)
                 )
+
+
+# --- white balance ---------------------------------------------------------------------------
+
+
+def test_white_balance_makes_the_lights_own_colour_grey() -> None:
+    # A white card lit by daylight of colour E reflects E/π: balanced, every channel reads
+    # the same code; unbalanced, the warm light stays warm.
+    light = np.array([0.77, 0.70, 0.62])  # the default scene's sun and sky (measured below)
+    card = np.broadcast_to(0.5 * light / light[1], (8, 8, 3)).astype(np.float32)
+    noise = camera_noise_seed(1, "card")
+    balanced = camera_model.capture(
+        card,
+        1.0,
+        _settings(psf_sigma_px=0.0, full_well_e=None),
+        noise,
+        None,
+        camera_model.white_balance_gains(light),
+    )
+    assert np.all(balanced == balanced[..., 1:2])
+    raw = camera_model.capture(card, 1.0, _settings(psf_sigma_px=0.0, full_well_e=None), noise)
+    assert raw[0, 0, 0] > raw[0, 0, 1] > raw[0, 0, 2]
+    # The writer's route: the gains recorded in meta, read back by png_pixels.
+    settings = CameraModelSpec(psf_sigma_px=0.0, full_well_e=None)
+    record = {
+        **imaging.dither_meta("off", 3),
+        **camera_model.camera_model_meta(settings, 3, light),
+    }
+    written = camera_model.png_pixels(card, 1.0, record, "card", CLEAN_LEVEL)
+    assert np.all(written == written[..., 1:2])
+    with pytest.raises(ValueError, match="three positive"):
+        camera_model.white_balance_gains(np.array([1.0, 0.0, 1.0]))
+
+
+def test_the_illuminant_is_the_clear_days_global_irradiance(mitsuba_variant) -> None:
+    # By quadrature of the emitters (illuminant_rgb) and by the clear sky's own sampling
+    # (clear_global_irradiance, which the overcast sky is scaled from): two routes, one light.
+    from seahaze.render.sky import clear_global_irradiance, illuminant_rgb
+
+    spec = parse_scene_text((ROOT / "scenes" / "default.yaml").read_text())
+    sun, sky = spec.sun, spec.sky
+    sampled = clear_global_irradiance(
+        sun.elevation_deg, sun.azimuth_deg, sky.turbidity, sky.ground_albedo
+    )
+    np.testing.assert_allclose(illuminant_rgb(spec), sampled, rtol=5e-3)
+    overcast = parse_scene_text((ROOT / "scenes" / "overcast.yaml").read_text())
+    gains = camera_model.white_balance_gains(illuminant_rgb(overcast))
+    np.testing.assert_allclose(gains, 1.0, rtol=1e-6)  # grey light needs no balance
+    # The scene's meta carries the gains the PNGs were balanced with.
+    from seahaze.render.engine import render_meta
+    from seahaze.spec import with_changes
+
+    balanced = with_changes(spec, {"render": {"camera_model": {}}})
+    record = render_meta(balanced)["camera_model"]
+    np.testing.assert_allclose(record["white_balance_gains"], sampled[1] / sampled, rtol=5e-3)
+    off = with_changes(spec, {"render": {"camera_model": {"white_balance": "off"}}})
+    assert "white_balance_gains" not in render_meta(off)["camera_model"]

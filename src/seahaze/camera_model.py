@@ -32,9 +32,15 @@ gives the PNGs a real camera's, the same way for the clean image and every level
    which at the ≥ 100 electrons of every pixel brighter than 1 % of white is below 0.1), no
    demosaicing (every channel is a pixel of its own). A pixel at or above the full well reads
    white without noise, as a saturated pixel does.
-4. **Encoding**: the 8-bit sRGB codes of :func:`seahaze.imaging.to_srgb8`, dithered as
+4. **White balance** (``white_balance: illuminant``): the channels scaled by ``E_G/E_c``, ``E``
+   the horizontal irradiance of the scene's sun and sky (linear sRGB), after the sensor, as a
+   camera's processing does (von Kries' diagonal adaptation: Fairchild, *Color Appearance
+   Models*, 3rd ed., Wiley 2013, ch. 9). Daylight off D65 — a 28° sun through turbidity 3 is
+   about 10 % red-heavy — then leaves a white surface grey, as in a photograph, instead of
+   the warm cast the raw renderer shows; the gains are in ``meta``.
+5. **Encoding**: the 8-bit sRGB codes of :func:`seahaze.imaging.to_srgb8`, dithered as
    ``render.dither`` says.
-5. **Compression** (:func:`jpeg_round_trip`), with ``jpeg_quality``: Pillow's JPEG encoder at
+6. **Compression** (:func:`jpeg_round_trip`), with ``jpeg_quality``: Pillow's JPEG encoder at
    that quality (4:2:0 chroma, baseline), decoded back, so the files stay PNG.
 
 The noise is seeded by :func:`seahaze.seeds.camera_noise_seed` from the scene's seed and name,
@@ -165,28 +171,48 @@ def capture(
     settings: CameraModelSpec,
     noise: np.random.SeedSequence,
     dither: np.random.SeedSequence | None = None,
+    gains: list[float] | None = None,
 ) -> np.ndarray:
     """The 8-bit sRGB image (H, W, 3) the camera of ``settings`` makes of ``radiance``: exposed,
-    blurred, read with the sensor noise of seed ``noise``, encoded (dithered with ``dither``)
-    and, with ``jpeg_quality``, JPEG-compressed (module docstring, steps 1–5)."""
+    blurred, read with the sensor noise of seed ``noise``, white-balanced by the channel
+    ``gains`` (None: none), encoded (dithered with ``dither``) and, with ``jpeg_quality``,
+    JPEG-compressed (module docstring, steps 1–6)."""
     linear = blur(np.asarray(radiance, dtype=np.float64) * float(exposure), settings)
     if settings.full_well_e is not None:
         normals = standard_normals(noise, linear.size)
         linear = sensor_signal(linear, settings.full_well_e, settings.read_noise_e, normals)
+    if gains is not None:
+        linear = linear * np.asarray(gains, np.float64)
     codes = imaging.to_srgb8(linear.astype(np.float32), 1.0, dither)
     if settings.jpeg_quality is not None:
         codes = jpeg_round_trip(codes, settings.jpeg_quality)
     return codes
 
 
-def camera_model_meta(settings: CameraModelSpec | None, seed: int) -> dict[str, Any]:
+def white_balance_gains(illuminant_rgb: np.ndarray) -> list[float]:
+    """The channel gains ``E_G/E_c`` that make light of colour ``illuminant_rgb`` (linear sRGB)
+    grey, green kept (module docstring, step 4)."""
+    e = np.asarray(illuminant_rgb, np.float64)
+    if e.shape != (3,) or not np.all(e > 0.0):
+        raise ValueError(f"an illuminant needs three positive channels, got {e}")
+    return [float(e[1] / c) for c in e]
+
+
+def camera_model_meta(
+    settings: CameraModelSpec | None, seed: int, illuminant_rgb: np.ndarray | None = None
+) -> dict[str, Any]:
     """``meta``'s record of the camera model (in its ``render`` entry): nothing without one (a
     scene's meta stays what it was before the camera model), else ``camera_model``, every
-    setting, the seed of :func:`seahaze.seeds.camera_noise_seed` and, with JPEG, the codec."""
+    setting, the seed of :func:`seahaze.seeds.camera_noise_seed`, with white balance its gains
+    (from ``illuminant_rgb``, the scene's light on a level surface) and, with JPEG, the codec."""
     if settings is None:
         return {}
     record: dict[str, Any] = settings.model_dump(mode="json")
     record["noise_seed"] = seed
+    if settings.white_balance == "illuminant":
+        if illuminant_rgb is None:
+            raise ValueError("white balance to the illuminant needs the scene's light")
+        record["white_balance_gains"] = white_balance_gains(illuminant_rgb)
     if settings.jpeg_quality is not None:
         record["jpeg_codec"] = jpeg_codec()
     record["applied_to"] = APPLIED_TO
@@ -224,5 +250,6 @@ def png_pixels(
     settings = settings_from_meta(render_meta)
     if settings is None:
         return imaging.to_srgb8(radiance, exposure, dither)
-    noise = camera_noise_seed(int(render_meta["camera_model"]["noise_seed"]), scene)
-    return capture(radiance, exposure, settings, noise, dither)
+    record = render_meta["camera_model"]
+    noise = camera_noise_seed(int(record["noise_seed"]), scene)
+    return capture(radiance, exposure, settings, noise, dither, record.get("white_balance_gains"))

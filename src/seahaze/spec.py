@@ -969,6 +969,13 @@ class CameraModelSpec(_Spec):
         description="JPEG quality (Pillow, 4:2:0 chroma): each PNG holds the decoded JPEG of "
         "its pixels, so the dataset stays PNG. null: no compression.",
     )
+    white_balance: Literal["illuminant", "off"] = Field(
+        "illuminant",
+        description="`illuminant`: the camera balances its white to the scene's daylight "
+        "(the colour of the sun's and sky's light on a level surface: a white card reads "
+        "grey, as a camera's daylight or auto setting makes it), so haze lit by a warm sun "
+        "is grey in the PNGs; `off`: the renderer's D65 white (the light's own colour).",
+    )
 
 
 class RenderSpec(_Spec):

@@ -471,6 +471,15 @@ def _visible_labels(
     }
 
 
+def _illuminant(spec: SceneSpec) -> np.ndarray | None:
+    """The scene's daylight (:func:`.sky.illuminant_rgb`) where its camera model balances its
+    white to it, else None (nothing to measure)."""
+    from .sky import illuminant_rgb
+
+    model = spec.render.camera_model
+    return illuminant_rgb(spec) if model and model.white_balance == "illuminant" else None
+
+
 def render_meta(spec: SceneSpec) -> dict[str, Any]:
     """``meta``'s ``render`` entry: the samples actually taken, the ``physical`` mode's
     estimator settings and vessel-light pass (its samples per pixel and smoothing radius),
@@ -489,7 +498,7 @@ def render_meta(spec: SceneSpec) -> dict[str, Any]:
         # How the writer quantises the PNGs (imaging.png_dither reads it back).
         **imaging.dither_meta(spec.render.dither, spec.render.seed),
         # The writer's camera model (camera_model.png_pixels reads it back); none: no key.
-        **camera_model_meta(spec.render.camera_model, spec.render.seed),
+        **camera_model_meta(spec.render.camera_model, spec.render.seed, _illuminant(spec)),
     }
     settings = settings_from(spec.render.estimator)
     if physical:

@@ -186,6 +186,36 @@ def overcast_dict(spec: SceneSpec) -> dict:
     return _envmap(mi.Bitmap(overcast.latlong_radiance(zenith, ENVMAP_ROWS)))
 
 
+ILLUMINANT_GRID = 128
+"""Zenith-cosine rows of the quadrature of :func:`illuminant_rgb` (twice as many azimuths)."""
+
+
+def illuminant_rgb(spec: SceneSpec) -> np.ndarray:
+    """The colour and strength of the scene's daylight: the horizontal irradiance (linear RGB)
+    of its sun (the disk's, times the sine of its elevation) and its sky (midpoint quadrature of
+    the sky emitter's radiance in ``cos θ`` and azimuth), as the emitters of
+    :func:`sun_and_sky_dicts` give them: what a camera white-balances to."""
+    import drjit as dr
+    import mitsuba as mi
+
+    from .sun_disk import disk_irradiance
+
+    sun_dict, sky_dict = sun_and_sky_dicts(spec)
+    beam = disk_irradiance(mi.load_dict(sun_dict)) * max(
+        np.sin(np.radians(spec.sun.elevation_deg)), 0.0
+    )
+    n = ILLUMINANT_GRID
+    mu = (np.arange(n) + 0.5) / n
+    phi = 2.0 * np.pi * (np.arange(2 * n) + 0.5) / (2 * n)
+    m, p = (a.ravel() for a in np.meshgrid(mu, phi, indexing="ij"))
+    s = np.sqrt(1.0 - m * m)
+    si = dr.zeros(mi.SurfaceInteraction3f, len(m))
+    si.wi = -mi.Vector3f(s * np.cos(p), s * np.sin(p), m)
+    radiance = np.array(mi.load_dict(sky_dict).eval(si), np.float64)
+    radiance = radiance if radiance.shape[-1] == 3 else radiance.T
+    return beam + 2.0 * np.pi * (radiance * m[:, None]).mean(axis=0)
+
+
 @cache
 def clear_global_irradiance(
     elevation_deg: float, azimuth_deg: float, turbidity: float, ground_albedo: float
