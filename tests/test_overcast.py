@@ -98,27 +98,15 @@ def _irradiance_by_sampling(emitter, n: int = 1 << 16) -> np.ndarray:
     return (values if values.shape[-1] == 3 else values.T).mean(axis=0)
 
 
-def _irradiance_by_quadrature(emitter, n: int = 256) -> np.ndarray:
-    """∫ L cos θ dω over the upper hemisphere, midpoint rule in (cos θ, φ): independent of the
-    emitter's own sampling."""
-    import drjit as dr
-    import mitsuba as mi
-
-    mu = (np.arange(n) + 0.5) / n
-    phi = 2 * np.pi * (np.arange(2 * n) + 0.5) / (2 * n)
-    m, p = (a.ravel() for a in np.meshgrid(mu, phi, indexing="ij"))
-    s = np.sqrt(1 - m * m)
-    si = dr.zeros(mi.SurfaceInteraction3f, len(m))
-    si.wi = -mi.Vector3f(s * np.cos(p), s * np.sin(p), m)
-    values = np.array(emitter.eval(si), np.float64)
-    values = values if values.shape[-1] == 3 else values.T
-    return (values * m[:, None]).mean(axis=0) * 2 * np.pi
-
-
 def test_the_overcast_sky_lets_through_a_quarter_of_the_clear_days_light(mitsuba_variant):
     import mitsuba as mi
 
-    from seahaze.render.sky import clear_global_irradiance, overcast_dict, sunsky_dict
+    from seahaze.render.sky import (
+        clear_global_irradiance,
+        horizontal_irradiance,
+        overcast_dict,
+        sunsky_dict,
+    )
 
     spec = overcast_spec()
     sun, sky = spec.sun, spec.sky
@@ -131,13 +119,13 @@ def test_the_overcast_sky_lets_through_a_quarter_of_the_clear_days_light(mitsuba
     from seahaze.render.sun_disk import disk_irradiance
 
     beam = disk_irradiance(mi.load_dict(sunsky_dict(spec, sky=False)))
-    expected = _irradiance_by_quadrature(clear_sky) + beam * math.sin(
+    expected = horizontal_irradiance(clear_sky, 256) + beam * math.sin(
         math.radians(sun.elevation_deg)
     )
     np.testing.assert_allclose(clear, expected, rtol=0.01)
     overcast_sky = mi.load_dict(overcast_dict(spec))
     quarter = 0.25 * float(overcast.REC709_LUMINANCE @ clear)
-    np.testing.assert_allclose(_irradiance_by_quadrature(overcast_sky), quarter, rtol=2e-3)
+    np.testing.assert_allclose(horizontal_irradiance(overcast_sky, 256), quarter, rtol=2e-3)
     np.testing.assert_allclose(_irradiance_by_sampling(overcast_sky), quarter, rtol=5e-3)
 
 

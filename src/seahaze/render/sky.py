@@ -195,7 +195,6 @@ def illuminant_rgb(spec: SceneSpec) -> np.ndarray:
     of its sun (the disk's, times the sine of its elevation) and its sky (midpoint quadrature of
     the sky emitter's radiance in ``cos θ`` and azimuth), as the emitters of
     :func:`sun_and_sky_dicts` give them: what a camera white-balances to."""
-    import drjit as dr
     import mitsuba as mi
 
     from .sun_disk import disk_irradiance
@@ -204,16 +203,25 @@ def illuminant_rgb(spec: SceneSpec) -> np.ndarray:
     beam = disk_irradiance(mi.load_dict(sun_dict)) * max(
         np.sin(np.radians(spec.sun.elevation_deg)), 0.0
     )
-    n = ILLUMINANT_GRID
+    return beam + horizontal_irradiance(mi.load_dict(sky_dict))
+
+
+def horizontal_irradiance(emitter: object, n: int = ILLUMINANT_GRID) -> np.ndarray:
+    """``∫ L cos θ dω`` (linear RGB) of an environment emitter over the upper hemisphere:
+    the midpoint rule on ``n`` zenith cosines × ``2n`` azimuths, independent of the emitter's
+    own sampling."""
+    import drjit as dr
+    import mitsuba as mi
+
     mu = (np.arange(n) + 0.5) / n
     phi = 2.0 * np.pi * (np.arange(2 * n) + 0.5) / (2 * n)
     m, p = (a.ravel() for a in np.meshgrid(mu, phi, indexing="ij"))
     s = np.sqrt(1.0 - m * m)
     si = dr.zeros(mi.SurfaceInteraction3f, len(m))
     si.wi = -mi.Vector3f(s * np.cos(p), s * np.sin(p), m)
-    radiance = np.array(mi.load_dict(sky_dict).eval(si), np.float64)
+    radiance = np.array(emitter.eval(si), np.float64)  # type: ignore[attr-defined]
     radiance = radiance if radiance.shape[-1] == 3 else radiance.T
-    return beam + 2.0 * np.pi * (radiance * m[:, None]).mean(axis=0)
+    return 2.0 * np.pi * (radiance * m[:, None]).mean(axis=0)
 
 
 @cache
