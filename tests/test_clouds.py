@@ -227,3 +227,35 @@ def test_a_clear_sky_records_no_clouds():
     spec = parse_scene_text("sky:\n  turbidity: 3\n", "s.yaml")
     assert "clouds" not in spec.sky.model_dump() and "model" not in spec.sky.model_dump()
     assert broken_spec().sky.model_dump()["clouds"]["oktas"] == 5
+
+
+def test_a_batch_draws_each_scene_its_own_clouds_and_amount():
+    from seahaze.batch.plan import plan_scenes
+    from seahaze.render.sky import cloud_layer
+    from seahaze.spec import with_changes
+
+    template = with_changes(broken_spec(), {"variation": {"cloud_oktas": [2, 6]}})
+    assert template.sky.clouds is not None and template.sky.clouds.seed == 4  # pinned
+    jobs = plan_scenes([(template, "broken")], count=12, master_seed=3).jobs
+    oktas = [job.spec.sky.clouds.oktas for job in jobs]
+    assert set(oktas) <= {2, 3, 4, 5, 6} and len(set(oktas)) >= 3, oktas
+    layers = {cloud_layer(job.spec).seed for job in jobs}
+    assert len(layers) == 12  # the pinned seed gave way: every scene its own layer
+    again = plan_scenes([(template, "broken")], count=12, master_seed=3).jobs
+    assert [job.spec for job in again] == [job.spec for job in jobs]
+    kept = with_changes(template, {"variation": {"resample_clouds": False}})
+    kept_jobs = plan_scenes([(kept, "broken")], count=3, master_seed=3).jobs
+    assert {cloud_layer(job.spec).seed for job in kept_jobs} == {4}
+    # Defaults leave a recorded config as it was before the clouds could vary.
+    recorded = parse_scene_text("sky:\n  turbidity: 3\n", "s.yaml").model_dump()["variation"]
+    assert "cloud_oktas" not in recorded and "resample_clouds" not in recorded
+
+
+def test_varying_the_clouds_of_a_clear_sky_is_refused():
+    with pytest.raises(SceneFileError) as err:
+        parse_scene_text("variation:\n  cloud_oktas: [2, 5]\n", "s.yaml")
+    message = str(err.value)
+    assert "variation.cloud_oktas" in message and "broken" in message, message
+    with pytest.raises(SceneFileError) as err:
+        parse_scene_text("sky:\n  model: broken\nvariation:\n  cloud_oktas: [2, 8]\n", "s.yaml")
+    assert "variation.cloud_oktas" in str(err.value) and "7" in str(err.value)

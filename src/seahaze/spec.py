@@ -1092,6 +1092,7 @@ _HeightEnd = Annotated[float, Field(ge=0.5, le=1000.0)]
 _PitchEnd = Annotated[float, Field(ge=-60.0, le=30.0)]
 _FovEnd = Annotated[float, Field(gt=1.0, le=120.0)]
 _RollEnd = Annotated[float, Field(ge=-45.0, le=45.0)]
+_OktaEnd = Annotated[int, Field(ge=1, le=7)]
 CAMERA_VARIATION = ("camera_height_m", "camera_pitch_deg", "camera_fov_deg", "camera_roll_deg")
 """Variation ranges of the camera's perspective (issue 17), left out of a recorded config
 when unset so configs recorded before them stay byte-identical."""
@@ -1153,6 +1154,17 @@ class VariationSpec(_Spec):
         description="Range `[low, high]` of `camera.roll_deg` (each end within -45..45).",
         json_schema_extra=_unit("deg"),
     )
+    cloud_oktas: tuple[_OktaEnd, _OktaEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `sky.clouds.oktas`, whole oktas drawn uniformly "
+        "(each end within 1..7); only with `sky.model: broken`.",
+        json_schema_extra=_unit("okta"),
+    )
+    resample_clouds: bool = Field(
+        True,
+        description="Give every scene of a broken sky its own cloud layer (a "
+        "`sky.clouds.seed` is replaced by one derived from the scene's seed).",
+    )
     resample_sea: bool = Field(
         True,
         description="Give every scene new wave phases (a `sea.seed` is replaced by one derived "
@@ -1170,6 +1182,11 @@ class VariationSpec(_Spec):
         for key in CAMERA_VARIATION:
             if getattr(self, key) is None:
                 data.pop(key, None)
+        # The clouds' settings too, at their defaults: configs recorded before them read alike.
+        if self.cloud_oktas is None:
+            data.pop("cloud_oktas", None)
+        if self.resample_clouds:
+            data.pop("resample_clouds", None)
         return data
 
     @model_validator(mode="after")
@@ -1393,6 +1410,15 @@ class SceneSpec(_Spec):
             raise ValueError(
                 "haze.patches and haze.bank need render.mode asm or reference: the physical "
                 "mode renders haze that varies with height alone; allowed: asm, reference"
+            )
+        return self
+
+    @model_validator(mode="after")
+    def _cloud_variation_needs_clouds(self) -> SceneSpec:
+        if self.variation.cloud_oktas is not None and self.sky.model != "broken":
+            raise ValueError(
+                f"variation.cloud_oktas: only a `broken` sky has clouds to vary (sky.model is "
+                f"'{self.sky.model}'); set sky.model: broken or remove variation.cloud_oktas"
             )
         return self
 

@@ -163,6 +163,13 @@ def vary_scene(spec: SceneSpec, seed: int) -> SceneSpec:
         data[section][name] = value
         if key == "wind_speed":
             data["sea"]["beaufort"] = None  # a Beaufort force would override the drawn wind
+    if variation.cloud_oktas is not None:
+        # Whole oktas, each equally likely; the stream after every VARIED range's.
+        low, high = variation.cloud_oktas
+        oktas = int(variation_rng(seed, len(VARIED)).integers(low, high + 1))
+        data["sky"]["clouds"] = {**(data["sky"].get("clouds") or {}), "oktas": oktas}
+    if variation.resample_clouds and data["sky"].get("clouds") is not None:
+        data["sky"]["clouds"]["seed"] = None  # derived from render.seed (render.sky)
     if variation.resample_sea:
         data["sea"]["seed"] = None  # derived from the scene's render.seed (seahaze.world)
     if variation.resample_layout and data["vessels"].get("sample") is not None:
