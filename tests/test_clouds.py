@@ -259,3 +259,26 @@ def test_varying_the_clouds_of_a_clear_sky_is_refused():
     with pytest.raises(SceneFileError) as err:
         parse_scene_text("sky:\n  model: broken\nvariation:\n  cloud_oktas: [2, 8]\n", "s.yaml")
     assert "variation.cloud_oktas" in str(err.value) and "7" in str(err.value)
+
+
+def test_a_batch_draws_its_skies_from_the_listed_models():
+    from seahaze.batch.plan import plan_scenes
+
+    template = parse_scene_text(
+        "variation:\n  sky_models: [clear, broken, overcast]\n  cloud_oktas: [3, 3]\n", "s.yaml"
+    )
+    jobs = plan_scenes([(template, "skies")], count=15, master_seed=1).jobs
+    models = [job.spec.sky.model for job in jobs]
+    assert set(models) == {"clear", "broken", "overcast"}, models
+    for job in jobs:  # clouds on the broken skies only, with the drawn amount
+        clouds = job.spec.sky.clouds
+        assert (clouds is not None) == (job.spec.sky.model == "broken")
+        assert clouds is None or clouds.oktas == 3
+    with pytest.raises(SceneFileError) as err:
+        parse_scene_text("variation:\n  sky_models: [clear, hazy]\n", "s.yaml")
+    assert "variation.sky_models" in str(err.value) and "'broken'" in str(err.value)
+    with pytest.raises(SceneFileError) as err:
+        parse_scene_text(
+            "haze:\n  top_m: 1500\nvariation:\n  sky_models: [clear, broken]\n", "s.yaml"
+        )
+    assert "sky.clouds.base_height_m" in str(err.value)

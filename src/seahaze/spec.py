@@ -1154,10 +1154,16 @@ class VariationSpec(_Spec):
         description="Range `[low, high]` of `camera.roll_deg` (each end within -45..45).",
         json_schema_extra=_unit("deg"),
     )
+    sky_models: list[Literal["clear", "broken", "overcast"]] | None = Field(
+        None,
+        min_length=1,
+        description="`sky.model`s to draw from, each equally likely (a name twice counts "
+        "twice), e.g. `[clear, broken, overcast, overcast]` for mostly grey days.",
+    )
     cloud_oktas: tuple[_OktaEnd, _OktaEnd] | None = Field(
         None,
         description="Range `[low, high]` of `sky.clouds.oktas`, whole oktas drawn uniformly "
-        "(each end within 1..7); only with `sky.model: broken`.",
+        "(each end within 1..7); only where the sky may be `broken`.",
         json_schema_extra=_unit("okta"),
     )
     resample_clouds: bool = Field(
@@ -1183,8 +1189,9 @@ class VariationSpec(_Spec):
             if getattr(self, key) is None:
                 data.pop(key, None)
         # The clouds' settings too, at their defaults: configs recorded before them read alike.
-        if self.cloud_oktas is None:
-            data.pop("cloud_oktas", None)
+        for key in ("sky_models", "cloud_oktas"):
+            if getattr(self, key) is None:
+                data.pop(key, None)
         if self.resample_clouds:
             data.pop("resample_clouds", None)
         return data
@@ -1413,12 +1420,18 @@ class SceneSpec(_Spec):
             )
         return self
 
+    def may_be_broken(self) -> bool:
+        """Whether this scene, or a scene of a batch drawn from it, has a broken sky."""
+        drawn = self.variation.sky_models
+        return self.sky.model == "broken" or (drawn is not None and "broken" in drawn)
+
     @model_validator(mode="after")
     def _cloud_variation_needs_clouds(self) -> SceneSpec:
-        if self.variation.cloud_oktas is not None and self.sky.model != "broken":
+        if self.variation.cloud_oktas is not None and not self.may_be_broken():
             raise ValueError(
                 f"variation.cloud_oktas: only a `broken` sky has clouds to vary (sky.model is "
-                f"'{self.sky.model}'); set sky.model: broken or remove variation.cloud_oktas"
+                f"'{self.sky.model}'); set sky.model: broken, put broken in "
+                "variation.sky_models or remove variation.cloud_oktas"
             )
         return self
 
@@ -1426,7 +1439,7 @@ class SceneSpec(_Spec):
     def _clouds_above_the_haze(self) -> SceneSpec:
         # The sky is drawn beyond the haze layer: a cloud base inside it would be cloud seen
         # through haze that should be around it.
-        if self.sky.model == "broken":
+        if self.may_be_broken():
             base = self.sky.cloud_layer.base_height_m
             if base <= self.haze.top_m:
                 raise ValueError(

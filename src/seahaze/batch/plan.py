@@ -163,7 +163,13 @@ def vary_scene(spec: SceneSpec, seed: int) -> SceneSpec:
         data[section][name] = value
         if key == "wind_speed":
             data["sea"]["beaufort"] = None  # a Beaufort force would override the drawn wind
-    if variation.cloud_oktas is not None:
+    if variation.sky_models is not None:
+        # One of the listed models, each entry equally likely; its own stream.
+        draw = variation_rng(seed, len(VARIED) + 1).integers(len(variation.sky_models))
+        data["sky"]["model"] = variation.sky_models[int(draw)]
+    if data["sky"].get("model", "clear") != "broken":
+        data["sky"].pop("clouds", None)  # a clear or overcast sky has no cloud layer
+    elif variation.cloud_oktas is not None:
         # Whole oktas, each equally likely; the stream after every VARIED range's.
         low, high = variation.cloud_oktas
         oktas = int(variation_rng(seed, len(VARIED)).integers(low, high + 1))
