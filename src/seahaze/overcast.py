@@ -81,10 +81,11 @@ def zenith_radiance(clear_global_rgb: np.ndarray) -> float:
 
 def latlong_radiance(zenith_rgb: float, rows: int = 512, columns: int = 4) -> np.ndarray:
     """The overcast sky as a latitude–longitude image (rows × columns × 3, float32, grey) of
-    radiance ``zenith_rgb · gradation``: row ``i`` looks at the zenith angle of its centre,
-    ``θ = π (i + ½) / rows`` (the top row at the zenith, the bottom at the nadir), every
-    column alike (no azimuth dependence). This is the layout of Mitsuba's ``envmap``."""
-    theta = math.pi * (np.arange(rows) + 0.5) / rows
+    radiance ``zenith_rgb · gradation``: row ``i`` at zenith angle ``θ = π i / (rows − 1)``
+    (the top row at the zenith, the bottom at the nadir), every column alike (no azimuth
+    dependence). This is where Mitsuba's ``envmap`` reads its rows
+    (:func:`seahaze.clouds.latlong_directions`)."""
+    theta = math.pi * np.arange(rows) / (rows - 1)
     column = zenith_rgb * gradation(np.cos(theta))
     image = np.repeat(column[:, None], columns, axis=1)
     return np.repeat(image[..., None], 3, axis=2).astype(np.float32)
