@@ -142,13 +142,13 @@ def _broken_image(sun: SunSpec, sky: SkySpec, layer: clouds.CloudLayer) -> np.nd
             sun.elevation_deg, sun.azimuth_deg, sky.turbidity, sky.ground_albedo
         )
     )
-    image = clouds.broken_sky_radiance(clear, zenith * sky.scale, layer, sky.turbidity)
-    return image
+    return clouds.broken_sky_radiance(clear, zenith * sky.scale, layer, sky.turbidity)
 
 
 def _latlong_of(emitter_dict: dict, rows: int, columns: int) -> np.ndarray:
-    """An environment emitter's radiance (linear RGB) at the texel centres of a
-    latitude–longitude image laid out as :func:`seahaze.clouds.latlong_directions`."""
+    """An environment emitter's radiance (linear RGB) at the pixels of a latitude–longitude
+    image, in the directions Mitsuba's ``envmap`` reads them
+    (:func:`seahaze.clouds.latlong_directions`)."""
     import drjit as dr
     import mitsuba as mi
 
