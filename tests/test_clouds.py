@@ -282,3 +282,47 @@ def test_a_batch_draws_its_skies_from_the_listed_models():
             "haze:\n  top_m: 1500\nvariation:\n  sky_models: [clear, broken]\n", "s.yaml"
         )
     assert "sky.clouds.base_height_m" in str(err.value)
+
+
+def test_the_wind_rises_with_height_as_the_marine_power_law():
+    # Hsu, Meindl & Gilhousen (1994): U(z) = U10 (z / 10 m)^0.11 over the open sea.
+    assert clouds.wind_at_height(8.0, 10.0) == pytest.approx(8.0)
+    assert clouds.wind_at_height(10.0, 1000.0) == pytest.approx(10.0 * 100.0**0.11)
+    assert clouds.wind_at_height(10.0, 1000.0) == pytest.approx(16.6, abs=0.05)
+
+
+def test_a_drifted_layer_is_the_same_layer_moved():
+    still = layer(5)
+    moved = clouds.CloudLayer(5, 1000.0, 800.0, 3, offset_m=(350.0, -120.0))
+    rng = np.random.default_rng(8)
+    points = rng.uniform(-3000.0, 3000.0, size=(500, 2))
+    # The direction to each point of the layer, and to where that point was before the drift.
+    to_now = np.column_stack([points, np.full(500, 1000.0)])
+    before = np.column_stack([points - [350.0, -120.0], np.full(500, 1000.0)])
+    to_now /= np.linalg.norm(to_now, axis=1, keepdims=True)
+    before /= np.linalg.norm(before, axis=1, keepdims=True)
+    np.testing.assert_allclose(moved.cover(to_now), still.cover(before), atol=1e-9)
+    assert not np.allclose(moved.cover(to_now), still.cover(to_now))
+
+
+def test_a_sequence_frame_drifts_its_clouds_with_the_wind_aloft(mitsuba_variant):
+    from seahaze.render.engine import open_session
+    from seahaze.render.sky import cloud_layer, sun_and_sky_dicts
+    from seahaze.spec import with_changes, with_overrides
+    from seahaze.world import sun_direction
+
+    spec = broken_spec()
+    speed = clouds.wind_at_height(spec.sea.wind_speed, spec.sky.clouds.base_height_m)
+    heading = math.radians(spec.sea.direction_deg)
+    drifted = cloud_layer(spec, 60.0)
+    expected = (60.0 * speed * math.cos(heading), 60.0 * speed * math.sin(heading))
+    np.testing.assert_allclose(drifted.offset_m, expected, rtol=1e-12)
+    sun = sun_direction(spec.sun.elevation_deg, spec.sun.azimuth_deg)
+    passes = [cloud_layer(spec, t).sun_transmission(sun) for t in (0.0, 30.0, 60.0, 90.0, 120.0)]
+    assert max(passes) - min(passes) > 0.5, passes  # a cloud crosses the sun in two minutes
+    t = 30.0 * int(np.argmin(passes))
+    assert sun_and_sky_dicts(spec, t)[0]["sun_scale"] == pytest.approx(min(passes))
+    # A frame of a sequence renders its own time's clouds.
+    sequence = with_changes(spec, {"sequence": {"frames": 5, "fps": 1.0 / 30.0}})
+    small = with_overrides(sequence, resolution=(48, 27), spp=1, levels=[2000.0])
+    assert open_session(small, frame=3).loaded.elapsed_s == pytest.approx(90.0)

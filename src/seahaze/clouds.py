@@ -68,9 +68,18 @@ Aerial perspective (Preetham, Shirley & Smits 1999)
     the camera (near the horizon it is that path's own light; overhead, where ``t`` is near 1,
     the stand-in hardly matters).
 
+Drift (Hsu, Meindl & Gilhousen 1994)
+    In a sequence the layer moves with the wind at its height, ``m(x − v t)``: the wind the sea
+    was built for (``U10`` toward ``sea.direction_deg``) raised to the cloud base by the
+    power law of the marine surface layer, ``U(z) = U10·(z/10 m)^0.11`` (exponent 0.11 ± 0.03
+    over the open sea in near-neutral air: Hsu, S. A., Meindl, E. A. & Gilhousen, D. B. (1994).
+    Determining the power-law wind-profile exponent under near-neutral stability conditions at
+    sea. *J. Appl. Meteor.* 33, 757–765), 1.66 × ``U10`` at 1000 m. A cloud crossing the sun
+    dims it as its edge passes.
+
 Limits: the clouds are flat (no sides or tops; near the horizon a real layer closes up more
 than its cover), cast no shadows (the sun is out or in for the whole scene), have no bright
-sunlit rims, and do not move in a sequence.
+sunlit rims, and keep their shapes as they drift (no growth or decay).
 """
 
 from __future__ import annotations
@@ -134,6 +143,19 @@ def cloud_brightness(oktas: float, deck_seen: float = 1.0, clear_lost: float = 0
     return gained / (share * full_deck * deck_seen)
 
 
+WIND_PROFILE_EXPONENT = 0.11
+"""Power-law exponent of the wind's rise with height over the open sea (Hsu et al. 1994)."""
+
+WIND_REFERENCE_HEIGHT_M = 10.0
+"""Height of the wind speed ``U10`` the sea is built for (m)."""
+
+
+def wind_at_height(u10: float, height_m: float) -> float:
+    """Wind speed (m/s) at ``height_m`` (m) over the open sea for ``u10`` (m/s at 10 m): the
+    power law ``U10·(z/10)^0.11`` (module docstring, "Drift")."""
+    return float(u10) * (float(height_m) / WIND_REFERENCE_HEIGHT_M) ** WIND_PROFILE_EXPONENT
+
+
 def _share(oktas: float) -> float:
     if not 0.0 <= oktas <= FULL_DECK_OKTAS:
         raise ValueError(f"cloud amount {oktas} oktas is outside 0..{FULL_DECK_OKTAS}")
@@ -149,6 +171,9 @@ class CloudLayer:
     base_m: float
     size_m: float
     seed: int
+    offset_m: tuple[float, float] = (0.0, 0.0)
+    """How far the layer has drifted (m, world x and y): the cover at ``p`` is the undrifted
+    layer's at ``p − offset``."""
 
     @property
     def share(self) -> float:
@@ -216,8 +241,8 @@ class CloudLayer:
         """The layer's noise where upward ``directions`` (n, 3) meet it, band-limited to what
         a texel of ``texel_rad`` resolves there, and how much its largest octave is."""
         mu = directions[:, 2]
-        x = self.base_m * directions[:, 0] / mu
-        y = self.base_m * directions[:, 1] / mu
+        x = self.base_m * directions[:, 0] / mu - self.offset_m[0]
+        y = self.base_m * directions[:, 1] / mu - self.offset_m[1]
         footprint = self.base_m * texel_rad / (mu * mu)  # along the range: H dθ / cos² θ
         return self._noise(x, y, footprint)
 

@@ -117,6 +117,9 @@ class SceneGeometry:
     is the mean foam albedo of the sea mesh."""
     camera_xy: tuple[float, float] = (0.0, 0.0)
     """Horizontal camera position (m) the distances are measured from (a ship platform's)."""
+    elapsed_s: float = 0.0
+    """Time of this frame after a sequence's first (s; 0 for a still): how far a broken sky's
+    clouds have drifted."""
 
     def digest(self) -> str:
         """SHA-256 of every mesh and material: two worlds with the same digest render the same
@@ -139,11 +142,18 @@ class SceneGeometry:
         return h.hexdigest()
 
 
+def wind_speed(spec: SceneSpec) -> float:
+    """The scene's wind ``U10`` (m/s at 10 m): ``sea.beaufort``'s when given, else
+    ``sea.wind_speed``."""
+    sea = spec.sea
+    return ocean.beaufort_wind_speed(sea.beaufort) if sea.beaufort is not None else sea.wind_speed
+
+
 def ocean_params(spec: SceneSpec, elapsed_s: float = 0.0) -> ocean.OceanParams:
     """Ocean generator parameters for a scene (Beaufort force, when given, sets the wind),
     ``elapsed_s`` seconds after ``sea.time_s`` (a sequence's frame time)."""
     sea = spec.sea
-    wind = ocean.beaufort_wind_speed(sea.beaufort) if sea.beaufort is not None else sea.wind_speed
+    wind = wind_speed(spec)
     return ocean.OceanParams(
         model=sea.model,
         spectrum=sea.spectrum,
@@ -540,4 +550,5 @@ def build_geometry(spec: SceneSpec, camera: Camera, frame: int | None = None) ->
         sea_foam_coverage=sea.foam_coverage,
         sea_foam_reflectance=sea.foam_reflectance,
         camera_xy=(camera.x_m, camera.y_m),
+        elapsed_s=elapsed,
     )

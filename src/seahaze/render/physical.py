@@ -86,7 +86,7 @@ class PhysicalRenderer:
         self.loaded, self.settings, self.medium = loaded, settings, loaded.medium
         # The sun and the sky as separate emitters: the sun's single scattering is computed
         # per pixel with shadow rays, the sky's goes into the table.
-        sun, sky = sun_and_sky_dicts(spec)
+        sun, sky = sun_and_sky_dicts(spec, loaded.elapsed_s)
         self.sun, self.sky = mi.load_dict(sun), mi.load_dict(sky)
         self.sun_azimuth_rad = math.radians(spec.sun.azimuth_deg)
         # A broken-cloud sky has no mirror symmetry about the sun's vertical plane: its tables

@@ -227,6 +227,9 @@ class LoadedScene:
     law's ``W`` for the wind and the faint residual foam around the counted whitecaps
     (``FoamField.mean_fraction``, 1.25 ``W``; 0 without whitecaps or on a flat sea). A plane
     model mixes ``(1 - F)·water + F·Lambertian(sea_foam_reflectance)``."""
+    elapsed_s: float = 0.0
+    """Time of this frame after a sequence's first (s; 0 for a still): the sky's clouds drifted
+    that long (``render.sky.cloud_layer``)."""
     sea_foam_reflectance: float = FOAM_REFLECTANCE
     """Mean visible reflectance of that foam, a Lambertian albedo: the foam-weighted mean of the
     per-vertex foam reflectance (``FoamField.mean_reflectance``, 0.185: Koepke's 0.22 over the
@@ -375,7 +378,7 @@ def build_scene(
             0.0,
             haze_box,
         ),
-        **sky_emitters(spec),
+        **sky_emitters(spec, geometry.elapsed_s),
         HAZE_BOX_ID: {
             "type": "cube",
             "to_world": mi.ScalarTransform4f()
@@ -405,7 +408,7 @@ def build_scene(
             camera, camera.width, camera.height, camera.fov_deg, camera.pitch_deg, False
         )
         clean = {"type": "scene", "integrator": integrator, "sensor": sensor}
-        clean_scene = mi.load_dict({**clean, **sky_emitters(spec), **surfaces})
+        clean_scene = mi.load_dict({**clean, **sky_emitters(spec, geometry.elapsed_s), **surfaces})
     loaded = mi.load_dict(scene)
     params = mi.traverse(loaded)
     shape_ids: dict[int, int] = {}
@@ -431,6 +434,7 @@ def build_scene(
         sea_roughness=geometry.sea_roughness,
         sea_foam_coverage=geometry.sea_foam_coverage,
         sea_foam_reflectance=geometry.sea_foam_reflectance,
+        elapsed_s=geometry.elapsed_s,
         clean_scene=clean_scene,
         vessel_materials=materials,
         vessel_paint=[part.paint for part in fleet],

@@ -19,7 +19,7 @@ import numpy as np
 from .. import clouds, overcast
 from ..seeds import Stream, stream_seed
 from ..spec import SceneSpec, SkySpec, SunSpec
-from ..world import sun_direction
+from ..world import sun_direction, wind_speed
 
 IRRADIANCE_SAMPLES = 1 << 16
 """Directions drawn from the clear ``sunsky`` to measure its global horizontal irradiance: the
@@ -68,9 +68,10 @@ def _sunsky(
     }
 
 
-def sky_emitters(spec: SceneSpec) -> dict[str, dict]:
+def sky_emitters(spec: SceneSpec, elapsed_s: float = 0.0) -> dict[str, dict]:
     """The emitters a scene holds for its lights, by scene key: the clear ``sunsky`` with its
-    sun, the overcast sky alone, or the broken sky and the sun it lets through.
+    sun, the overcast sky alone, or the broken sky and the sun it lets through, its clouds
+    drifted for ``elapsed_s`` (s: a sequence's frame time, :func:`cloud_layer`).
 
     A Mitsuba scene holds one environment emitter, so a broken sky's sun is a ``directional``
     emitter of the sun disk's irradiance (the ``physical`` mode, which takes its own emitters,
@@ -78,7 +79,7 @@ def sky_emitters(spec: SceneSpec) -> dict[str, dict]:
     scattering or the sea's glint resolves, and which a camera looking into the sun would."""
     if spec.sky.model == "clear":
         return {"sky": sunsky_dict(spec)}
-    sun, sky = sun_and_sky_dicts(spec)
+    sun, sky = sun_and_sky_dicts(spec, elapsed_s)
     if spec.sky.model == "overcast":
         return {"sky": sky}
     return {"sky": sky, "sun": _directional_sun(sun)}
@@ -98,35 +99,44 @@ def _directional_sun(sun_dict: dict) -> dict:
     }
 
 
-def sun_and_sky_dicts(spec: SceneSpec) -> tuple[dict, dict]:
+def sun_and_sky_dicts(spec: SceneSpec, elapsed_s: float = 0.0) -> tuple[dict, dict]:
     """The sun alone and the sky alone (the ``physical`` mode samples the sun on its own). An
     overcast day's sun is a ``sunsky`` with both parts off: it adds nothing; a broken sky's
-    sun is scaled by the share of its beam the cloud in its direction passes."""
+    sun is scaled by the share of its beam the cloud in its direction passes, its clouds
+    drifted for ``elapsed_s`` (s)."""
     if spec.sky.model == "overcast":
         return sunsky_dict(spec, sun=False, sky=False), overcast_dict(spec)
     if spec.sky.model == "broken":
+        layer = cloud_layer(spec, elapsed_s)
         sun = sunsky_dict(spec, sky=False)
-        sun["sun_scale"] *= cloud_layer(spec).sun_transmission(
+        sun["sun_scale"] *= layer.sun_transmission(
             sun_direction(spec.sun.elevation_deg, spec.sun.azimuth_deg)
         )
-        return sun, broken_dict(spec)
+        return sun, broken_dict(spec, layer)
     return sunsky_dict(spec, sky=False), sunsky_dict(spec, sun=False)
 
 
-def cloud_layer(spec: SceneSpec) -> clouds.CloudLayer:
-    """The broken cloud layer of ``spec`` (``sky.clouds``), its seed from the scene's."""
+def cloud_layer(spec: SceneSpec, elapsed_s: float = 0.0) -> clouds.CloudLayer:
+    """The broken cloud layer of ``spec`` (``sky.clouds``), its seed from the scene's, drifted
+    for ``elapsed_s`` (s) with the wind at its base (:func:`seahaze.clouds.wind_at_height` of
+    the scene's ``U10``, toward ``sea.direction_deg``)."""
     c = spec.sky.cloud_layer
     seed = stream_seed(spec.render.seed, Stream.CLOUDS, c.seed)
-    return clouds.CloudLayer(c.oktas, c.base_height_m, c.size_m, seed)
+    speed = clouds.wind_at_height(wind_speed(spec), c.base_height_m)
+    heading = np.radians(spec.sea.direction_deg)
+    drift = (float(speed * elapsed_s * np.cos(heading)), float(speed * elapsed_s * np.sin(heading)))
+    return clouds.CloudLayer(c.oktas, c.base_height_m, c.size_m, seed, drift)
 
 
-def broken_dict(spec: SceneSpec) -> dict:
+def broken_dict(spec: SceneSpec, layer: clouds.CloudLayer | None = None) -> dict:
     """The broken sky of ``spec`` as an ``envmap`` (:func:`seahaze.clouds.broken_sky_radiance`):
     the clear ``sunsky``'s sky radiance at each texel's direction, cloud of the overcast deck's
-    gradation where the layer covers it; scaled by ``sky.scale`` (the clear sky already is)."""
+    gradation where ``layer`` (default: :func:`cloud_layer`, undrifted) covers it; scaled by
+    ``sky.scale`` (the clear sky already is)."""
     import mitsuba as mi
 
-    return _envmap(mi.Bitmap(_broken_image(spec.sun, spec.sky, cloud_layer(spec))))
+    layer = cloud_layer(spec) if layer is None else layer
+    return _envmap(mi.Bitmap(_broken_image(spec.sun, spec.sky, layer)))
 
 
 @lru_cache(maxsize=2)
