@@ -241,3 +241,210 @@ def test_the_wind_off_the_bow(toward: float, heading: float, expected: float) ->
     # A wind toward +x comes from azimuth 180: dead astern of a bow to +x, ahead of one to -x,
     # on the port beam of a bow to +y (counter-clockwise, port, is positive).
     assert wind_off_bow(toward, heading) == pytest.approx(expected)
+
+
+# --------------------------------------------------------------- tug and fishing boat details
+CRAFT_SEEDS = tuple(range(8))
+
+
+@pytest.fixture(scope="module")
+def craft() -> dict[tuple[str, int], VesselModel]:
+    """Tugs and fishing boats for more seeds than ``built`` (their gear is drawn at random)."""
+    return {
+        (kind, seed): build_vessel(kind, None, np.random.default_rng(seed))
+        for kind in ("tug", "fishing_boat")
+        for seed in CRAFT_SEEDS
+    }
+
+
+def _hull_half_width(model: VesselModel, x: float, z: float) -> float:
+    """Half-breadth (m) of the hull surface at (x, z), read off the hull loft's station loops
+    (its last two vertices are the end caps' centres): each station's port side interpolated
+    in z, then the two stations around x interpolated in x."""
+    v = np.asarray(model.part("hull").mesh.vertices)[:-2]
+    stations = np.unique(v[:, 0])
+    i = int(np.clip(np.searchsorted(stations, x), 1, len(stations) - 1))
+
+    def at(xs: float) -> float:
+        loop = v[(v[:, 0] == xs) & (v[:, 1] > 0.0)]
+        order = np.argsort(loop[:, 2])
+        return float(np.interp(z, loop[order, 2], loop[order, 1]))
+
+    x0, x1 = stations[i - 1], stations[i]
+    t = float(np.clip((x - x0) / (x1 - x0), 0.0, 1.0))
+    return (1.0 - t) * at(x0) + t * at(x1)
+
+
+def _hull_deck_z(model: VesselModel, x: float) -> float:
+    """Deck-edge height (m) of the hull at x: its stations' tops interpolated."""
+    v = np.asarray(model.part("hull").mesh.vertices)[:-2]
+    stations = np.unique(v[:, 0])
+    tops = [v[v[:, 0] == s, 2].max() for s in stations]
+    return float(np.interp(x, stations, tops))
+
+
+def _hull_deck_z_bounds(model: VesselModel, x: float) -> tuple[float, float]:
+    """Lower and higher deck-edge height (m) of the two hull stations either side of x (the
+    deck between them lies between the two, even on a forecastle's short ramp)."""
+    v = np.asarray(model.part("hull").mesh.vertices)[:-2]
+    stations = np.unique(v[:, 0])
+    i = int(np.clip(np.searchsorted(stations, x), 1, len(stations) - 1))
+    tops = (v[v[:, 0] == stations[i - 1], 2].max(), v[v[:, 0] == stations[i], 2].max())
+    return float(min(tops)), float(max(tops))
+
+
+def _bodies(model: VesselModel, name: str) -> list:
+    """The disjoint bodies of part ``name``."""
+    return model.part(name).mesh.split(only_watertight=False)
+
+
+def test_a_tugs_rubber_fenders_ring_the_sheer_and_cover_the_bow(craft) -> None:
+    for seed in CRAFT_SEEDS:
+        model = craft[("tug", seed)]
+        half_l = 0.5 * model.length_m
+        v = np.asarray(model.part("fender").mesh.vertices)
+        # Every fender vertex stands 0.2-0.45 m proud of the hull (the D-fender 0.25-0.45 m,
+        # the bow block 85 % of it; 3 cm for reading the curved bow off its stations): on the
+        # hull's outline, not inside it or off it.
+        # (Leaving out the end caps' centres, on the centreline.)
+        side = v[(np.abs(v[:, 0]) < 0.45 * model.length_m) & (np.abs(v[:, 1]) > 0.1)]
+        offsets = [abs(y) - _hull_half_width(model, x, z) for x, y, z in side]
+        assert min(offsets) >= 0.2 and max(offsets) <= 0.48, (seed, min(offsets), max(offsets))
+        # Along the whole midbody the fender's top follows the sheer, 5 cm under the deck edge.
+        mid = v[np.abs(v[:, 0]) < 0.3 * model.length_m]
+        xs = np.unique(mid[:, 0])
+        assert len(xs) >= 8 and np.ptp(xs) > 0.5 * model.length_m, seed
+        for x in xs:
+            top = mid[mid[:, 0] == x, 2].max()
+            lo, hi = _hull_deck_z_bounds(model, x)
+            assert lo - 0.08 <= top <= hi - 0.02, (seed, x)
+        # The bow carries rubber from the deck down to 0.4 m above the water.
+        bow = v[v[:, 0] > half_l - 0.1 * model.length_m]
+        assert bow[:, 2].min() == pytest.approx(0.4, abs=0.01), seed
+        assert _hull_deck_z(model, 0.45 * model.length_m) > 2.5
+
+
+def test_a_tugs_tyres_hang_against_its_sides_inside_the_beam(craft) -> None:
+    for seed in CRAFT_SEEDS:
+        model = craft[("tug", seed)]
+        tyres = _bodies(model, "tyres")
+        port = [t for t in tyres if t.bounds[0, 1] > 0.0]
+        assert len(port) >= 5 and len(tyres) == 2 * len(port), seed
+        for tyre in tyres:
+            (x0, y0, z0), (x1, y1, z1) = tyre.bounds
+            # Truck tyres 1.0-1.2 m across (decagons: 0.95 of that across the flats), their
+            # centres above the water (where the freeboard is low they dip into it).
+            assert 0.95 <= z1 - z0 <= 1.2 + 1e-9 and 0.95 <= x1 - x0 <= 1.2 + 1e-9
+            assert z0 >= -0.25 and z0 + z1 > 0.0
+            inner, outer = min(abs(y0), abs(y1)), max(abs(y0), abs(y1))
+            hull = _hull_half_width(model, 0.5 * (x0 + x1), 0.5 * (z0 + z1))
+            assert inner <= hull <= outer, seed  # resting against the hull
+            assert outer <= 0.5 * model.beam_m, seed  # inside the D-fender's line
+            assert -0.5 * model.length_m < x0 and x1 < 0.5 * model.length_m
+
+
+def test_a_tugs_wheelhouse_is_glazed_all_round_and_set_forward(craft) -> None:
+    for seed in CRAFT_SEEDS:
+        model = craft[("tug", seed)]
+        house = max(_bodies(model, "superstructure"), key=lambda b: b.bounds[1, 2])
+        (hx0, hy0, hz0), (hx1, hy1, hz1) = house.bounds
+        assert 0.5 * (hx0 + hx1) > 0.0, seed  # forward of midships
+        glazing = max(_bodies(model, "windows"), key=lambda b: b.bounds[1, 2])
+        (gx0, gy0, gz0), (gx1, gy1, gz1) = glazing.bounds
+        # Proud of the wheelhouse's front, back and both sides: windows all round, at least
+        # 1.0 m tall (IMO MSC/Circ.982: sill at most 1.0 m, head at least 2.0 m up).
+        assert gx0 < hx0 and gx1 > hx1 and gy0 < hy0 and gy1 > hy1, seed
+        assert gz1 - gz0 >= 1.0 and hz0 < gz0 < gz1 < hz1, seed
+
+
+def test_a_tugs_afterdeck_carries_a_towing_winch_and_bitt(craft) -> None:
+    for seed in CRAFT_SEEDS:
+        model = craft[("tug", seed)]
+        house_aft = model.part("superstructure").mesh.bounds[0, 0]
+        for name in ("towing_winch", "towing_bitt"):
+            (x0, y0, z0), (x1, y1, z1) = model.part(name).mesh.bounds
+            assert -0.5 * model.length_m < x0 and x1 < house_aft, (seed, name)
+            deck = _hull_deck_z(model, 0.5 * (x0 + x1))
+            assert z0 <= deck < deck + 1.0 <= z1, (seed, name)  # standing on the deck
+            assert max(abs(y0), abs(y1)) < 0.5 * model.beam_m
+        # The winch's drum lies across the ship, between its two cheeks.
+        winch = _bodies(model, "towing_winch")
+        drums = [b for b in winch if np.ptp(b.bounds[:, 1]) > 1.5 * np.ptp(b.bounds[:, 0])]
+        assert len(drums) == 1 and len(winch) == 3, seed
+
+
+def test_a_fishing_boats_gantry_stands_at_its_stern(craft) -> None:
+    with_gantry = 0
+    for seed in CRAFT_SEEDS:
+        model = craft[("fishing_boat", seed)]
+        if "gantry" not in model.part_names:
+            continue
+        with_gantry += 1
+        (x0, y0, _), (x1, y1, z1) = model.part("gantry").mesh.bounds
+        # Within the hull's length, over the last ~13 % of it, at least 3 m above the deck.
+        assert -0.5 * model.length_m <= x0 and x1 < -0.37 * model.length_m + 0.6, seed
+        assert z1 > _hull_deck_z(model, x0) + 3.0, seed
+        assert max(abs(y0), abs(y1)) < 0.5 * model.beam_m
+        # An "A" from the side: a leg and a brace meet at the top, apart at the deck.
+        legs = [b for b in _bodies(model, "gantry") if b.bounds[1, 1] > 0.0 > b.bounds[0, 1]]
+        assert legs  # the top beam, across the ship
+        feet = np.asarray(model.part("gantry").mesh.vertices)
+        low = feet[feet[:, 2] < _hull_deck_z(model, x0) + 0.2]
+        assert np.ptp(low[:, 0]) > 1.0, seed
+    assert with_gantry >= 4
+
+
+def test_a_fishing_boats_net_drum_stands_on_its_open_deck(craft) -> None:
+    drums = 0
+    for seed in CRAFT_SEEDS:
+        model = craft[("fishing_boat", seed)]
+        if "net_drum" not in model.part_names:
+            continue
+        drums += 1
+        (x0, y0, z0), (x1, y1, _) = model.part("net_drum").mesh.bounds
+        assert y1 - y0 > x1 - x0, seed  # its axis across the ship
+        assert max(abs(y0), abs(y1)) < 0.5 * model.beam_m
+        assert -0.5 * model.length_m < x0 and x1 < 0.5 * model.length_m
+        assert z0 > _hull_deck_z(model, 0.5 * (x0 + x1)), seed
+        for house in _bodies(model, "superstructure"):  # clear of the deckhouse
+            assert x1 < house.bounds[0, 0] or x0 > house.bounds[1, 0], seed
+    assert drums >= 5
+
+
+def test_a_fishing_boats_rust_streaks_lie_on_its_topsides(craft) -> None:
+    for seed in CRAFT_SEEDS:
+        model = craft[("fishing_boat", seed)]
+        v = np.asarray(model.part("rust").mesh.vertices)
+        for x, y, z in v[np.abs(v[:, 1]) > 0.1]:  # not the end caps' centres
+            hull = _hull_half_width(model, x, z)
+            # A few mm proud; 2 cm either way for reading the hull off its stations.
+            assert hull - 0.02 <= abs(y) <= hull + 0.03, (seed, x, z, abs(y) - hull)
+            assert 0.3 <= z <= _hull_deck_z_bounds(model, x)[1], (seed, x, z)
+
+
+@pytest.mark.parametrize("kind", ["tug", "fishing_boat"])
+def test_every_part_lies_inside_the_reported_length_beam_and_air_draft(craft, kind) -> None:
+    for seed in CRAFT_SEEDS:
+        model = craft[(kind, seed)]
+        for part in model.parts:
+            (x0, y0, _), (x1, y1, z1) = part.mesh.bounds
+            assert -0.5 * model.length_m - 1e-6 <= x0 and x1 <= 0.5 * model.length_m + 1e-6
+            assert max(abs(y0), abs(y1)) <= 0.5 * model.beam_m + 0.02, (seed, part.name)
+            assert z1 <= model.air_draft_m
+
+
+@pytest.mark.parametrize(("kind", "most_faces"), [("tug", 9000), ("fishing_boat", 7000)])
+def test_small_craft_are_deterministic_and_light(craft, kind: str, most_faces: int) -> None:
+    for seed in CRAFT_SEEDS[:3]:
+        again = build_vessel(kind, None, np.random.default_rng(seed))
+        model = craft[(kind, seed)]
+        assert again.part_names == model.part_names
+        for a, b in zip(again.parts, model.parts, strict=True):
+            np.testing.assert_array_equal(a.mesh.vertices, b.mesh.vertices)
+            assert a.material == b.material
+        # A scene renders many vessels: a few thousand triangles each.
+        assert sum(len(p.mesh.faces) for p in model.parts) < most_faces
+    other = craft[(kind, 1)]
+    assert other.part_names != craft[(kind, 0)].part_names or not np.array_equal(
+        other.part("hull").mesh.vertices, craft[(kind, 0)].part("hull").mesh.vertices
+    )
