@@ -111,6 +111,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from seahaze.vessels.buoy import build_buoy
+from seahaze.vessels.leisure import build_sailboat, build_speedboat
 from seahaze.vessels.merchant import (
     build_bulk_carrier,
     build_container_ship,
@@ -119,12 +120,7 @@ from seahaze.vessels.merchant import (
 )
 from seahaze.vessels.model import VesselModel, VesselPart
 from seahaze.vessels.parts import PrincipalDims
-from seahaze.vessels.smallcraft import (
-    build_fishing_boat,
-    build_sailboat,
-    build_speedboat,
-    build_tug,
-)
+from seahaze.vessels.smallcraft import build_fishing_boat, build_tug
 
 __all__ = [
     "CLASS_NAMES",

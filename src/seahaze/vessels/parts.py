@@ -60,6 +60,11 @@ def deck_range(form: HullForm, x0: float, x1: float) -> tuple[float, float]:
     return float(z.min()), float(z.max())
 
 
+def deck_at(form: HullForm, x: float) -> float:
+    """Deck height (m) at station ``x`` (m): where a part stands on the deck there."""
+    return float(form.deck_z(np.array([x]))[0])
+
+
 def min_half_beam(form: HullForm, x0: float, x1: float) -> float:
     """Narrowest deck half-breadth over ``[x0, x1]`` so a block never overhangs the side."""
     return float(form.deck_half_beam(np.linspace(min(x0, x1), max(x0, x1), 16)).min())

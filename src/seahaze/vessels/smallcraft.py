@@ -1,4 +1,5 @@
-"""Small vessels: fishing boat (trawler / seiner), harbour tug, sailing yacht, speedboat.
+"""Small working vessels: fishing boat (trawler / seiner) and harbour tug (the leisure craft,
+sailing yacht and speedboat, are in :mod:`seahaze.vessels.leisure`).
 
 Builders receive principal dimensions sampled inside the class ranges (see
 :mod:`seahaze.vessels.library`) and draw the rest from ``rng`` inside the ranges written
@@ -14,11 +15,8 @@ import numpy as np
 from seahaze.vessels.geometry import (
     HullForm,
     box,
-    convex_body,
     cylinder_between,
     loft_hull,
-    tapered_block,
-    thin_triangle,
     vertical_cylinder,
 )
 from seahaze.vessels.materials import (
@@ -27,7 +25,6 @@ from seahaze.vessels.materials import (
     HULL_PAINTS_CARGO,
     HULL_PAINTS_SMALL,
     MACHINERY_PAINTS,
-    SAIL_CLOTH,
     SUPERSTRUCTURE_WHITES,
     WINDOW_GLASS,
     Material,
@@ -35,9 +32,17 @@ from seahaze.vessels.materials import (
     pick_material,
 )
 from seahaze.vessels.model import VesselPart
-from seahaze.vessels.parts import EMBED_M, PartSet, PrincipalDims, deck_range, min_half_beam, u
+from seahaze.vessels.parts import (
+    EMBED_M,
+    PartSet,
+    PrincipalDims,
+    deck_at,
+    deck_range,
+    min_half_beam,
+    u,
+)
 
-__all__ = ["build_fishing_boat", "build_sailboat", "build_speedboat", "build_tug"]
+__all__ = ["build_fishing_boat", "build_tug"]
 
 BLACK_RUBBER = material_from_srgb8("fender_rubber", (25, 25, 25), 0.8)
 
@@ -51,10 +56,6 @@ NET_COLOURS = (
 )
 """Trawl netting wound on a drum: polyethylene twine, usually green, orange or blue (matt;
 the roughness one of render.fleet.ROUGHNESS_CLASSES, as every built-in material's is)."""
-
-
-def _deck_at(form: HullForm, x: float) -> float:
-    return float(form.deck_z(np.array([x]))[0])
 
 
 def _detail_rng(d: PrincipalDims) -> np.random.Generator:
@@ -160,7 +161,7 @@ def build_fishing_boat(d: PrincipalDims, rng: np.random.Generator) -> list[Vesse
         # Gallows / derrick mast at the fore end of the working deck; its derrick reaches aft
         # (or forward on a seiner) over the deck: about a third of the length (FAO FTP 267).
         xm = work_fwd - 0.2 if trawler else work_aft + 0.2
-        zm = _deck_at(form, xm)
+        zm = deck_at(form, xm)
         post_h = u(extra, 0.22, 0.32) * length + 1.0
         post_r = max(0.1, 0.008 * length)
         parts.add_mast(xm, 0.0, zm, post_h, post_r, gear, name="derrick")
@@ -196,7 +197,7 @@ def build_fishing_boat(d: PrincipalDims, rng: np.random.Generator) -> list[Vesse
         # FAO FTP 267 drawings), the wound net inside them.
         rd = float(np.clip(u(extra, 0.025, 0.035) * length, 0.4, 1.1))
         xd = work_aft + 0.1 * length + rd if trawler else 0.5 * (work_aft + work_fwd)
-        zd = _deck_at(form, xd) + rd + 0.3
+        zd = deck_at(form, xd) + rd + 0.3
         half = 0.55 * min_half_beam(form, xd - rd, xd + rd)
         parts.add(
             "net_drum",
@@ -263,7 +264,7 @@ def _gantry(parts: PartSet, form: HullForm, rng: np.random.Generator, paint: Mat
     stands about 4-8 m above the deck (FAO FTP 267 drawings); legs about 1 % L thick."""
     length = form.length
     xg = -form.half_length + u(rng, 0.03, 0.06) * length
-    zg = _deck_at(form, xg)
+    zg = deck_at(form, xg)
     top = zg + u(rng, 0.12, 0.2) * length + 1.5
     half = min_half_beam(form, xg - 0.5, xg + 0.5)
     r = max(0.12, 0.01 * length)
@@ -285,7 +286,7 @@ def _gantry(parts: PartSet, form: HullForm, rng: np.random.Generator, paint: Mat
     # Forward braces from the top of each leg down to the deck: with the legs they make the
     # "A" that shows from the side.
     x_foot = min(xg + 0.35 * (top - zg), form.half_length)
-    z_foot = _deck_at(form, x_foot)
+    z_foot = deck_at(form, x_foot)
     for side in (-1.0, 1.0):
         parts.add(
             "gantry",
@@ -514,7 +515,7 @@ def build_tug(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
     # tug) aft of the house and an H-bitt (towing post) near the stern.
     gear = pick_material(MACHINERY_PAINTS, extra)
     xw = x_aft - u(extra, 0.06, 0.09) * length
-    zw = _deck_at(form, xw)
+    zw = deck_at(form, xw)
     wr = u(extra, 0.02, 0.028) * length
     half = 0.45 * min_half_beam(form, xw - wr, xw + wr)
     parts.add(
@@ -536,7 +537,7 @@ def build_tug(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
             gear,
         )
     xt = -form.half_length + u(extra, 0.08, 0.12) * length
-    zt = _deck_at(form, xt)
+    zt = deck_at(form, xt)
     bitt_h = u(extra, 1.0, 1.4)
     half = 0.35 * min_half_beam(form, xt - 0.3, xt + 0.3)
     for side in (-1.0, 1.0):
@@ -552,7 +553,7 @@ def build_tug(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
     )
     if rng.random() < 0.5:  # towing staple over the aft deck
         xt = -u(rng, 0.3, 0.38) * length
-        zt = _deck_at(form, xt)
+        zt = deck_at(form, xt)
         half = 0.7 * min_half_beam(form, xt - 0.3, xt + 0.3)
         top = zt + u(rng, 1.8, 2.4)
         for side in (-1.0, 1.0):
@@ -565,234 +566,3 @@ def build_tug(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
             "towing_staple", cylinder_between((xt, -half, top), (xt, half, top), 0.12), funnel
         )
     return parts.to_parts()
-
-
-def build_sailboat(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
-    """Sailing yacht (sloop): low hull with counter stern, coachroof, fin keel and rudder,
-    mast about 1.2-1.45 L above deck, mainsail + jib set (75 %) or stowed on the boom."""
-    length, beam = d.length, d.beam
-    form = HullForm(
-        length=length,
-        beam=beam,
-        draft=d.draft,
-        freeboard=d.freeboard,
-        sheer_fwd=u(rng, 0.1, 0.25) * d.depth,
-        sheer_aft=u(rng, 0.0, 0.05) * d.depth,
-        entrance_exponent=u(rng, 1.5, 2.0),
-        transom_width=u(rng, 0.55, 0.9),
-        stem_rake=u(rng, 0.02, 0.1),
-        stem_exponent=1.0,
-        stern_cutup=u(rng, 0.3, 0.4),
-        transom_immersion=u(rng, -0.6, -0.1),
-        section_exponent=2.0,
-        bow_flare=0.15,
-        topside_flare=0.08,
-    )
-    hull = HULL_PAINTS_SMALL[0] if rng.random() < 0.75 else pick_material(HULL_PAINTS_SMALL, rng)
-    deck_white = pick_material(SUPERSTRUCTURE_WHITES, rng)
-    antifouling = pick_material(ANTIFOULING_REDS, rng)
-    glass = WINDOW_GLASS[0]
-    parts = PartSet()
-    parts.add_hull(form, hull, bottom=antifouling, boot_top_z=0.08)
-
-    # Coachroof.
-    xa, xf = -u(rng, 0.05, 0.15) * length, u(rng, 0.12, 0.22) * length
-    z0, _ = deck_range(form, xa, xf)
-    hw = u(rng, 0.55, 0.7) * min_half_beam(form, xa, xf)
-    ch = float(np.clip(u(rng, 0.05, 0.07) * length, 0.4, 1.5))
-    parts.add_block(
-        "superstructure",
-        deck_white,
-        xa,
-        xf,
-        hw,
-        z0 - EMBED_M,
-        z0 + ch,
-        front_rake=0.6 * ch,
-        top_inset=0.1 * hw,
-    )
-    parts.add_window_band(
-        xa + 0.3 * (xf - xa), xf - ch, 0.95 * hw, z0 + 0.35 * ch, z0 + 0.7 * ch, glass, proud=0.02
-    )
-
-    # Fin keel and spade rudder: below the water, they set the draft the mesh reports.
-    total_draft = max(d.draft + 0.3, u(rng, 0.13, 0.19) * length)
-    chord_top, chord_bot = 0.14 * length, 0.08 * length
-    thick = max(0.04, 0.012 * length)
-    keel_pts = (
-        [(0.06 * length - chord_top, s * thick, -0.7 * d.draft) for s in (-1, 1)]
-        + [(0.06 * length, s * thick, -0.7 * d.draft) for s in (-1, 1)]
-        + [(0.04 * length - chord_bot, s * 0.6 * thick, -total_draft) for s in (-1, 1)]
-        + [(0.04 * length, s * 0.6 * thick, -total_draft) for s in (-1, 1)]
-    )
-    parts.add("keel", convex_body(keel_pts), antifouling)
-    xr = -0.38 * length
-    zr = float(form.keel_z(np.array([xr]))[0])
-    rudder_pts = [
-        (xr + dx, s * 0.6 * thick, z)
-        for dx in (-0.04 * length, 0.02 * length)
-        for s in (-1, 1)
-        for z in (zr + 0.1, -0.6 * total_draft)
-    ]
-    parts.add("keel", convex_body(rudder_pts), antifouling)
-
-    # Rig.
-    x_mast = u(rng, 0.02, 0.12) * length
-    deck_m = _deck_at(form, x_mast)
-    mast_h = u(rng, 1.2, 1.45) * length
-    mast_r = max(0.05, 0.008 * length)
-    spar = pick_material((MACHINERY_PAINTS[1], MACHINERY_PAINTS[2]), rng)
-    parts.add_mast(x_mast, 0.0, deck_m, mast_h, mast_r, spar, yard_half_width=0.12 * beam)
-    boom_z = deck_m + min(1.2, 0.1 * length) + ch * 0.5
-    boom_len = min(u(rng, 0.33, 0.42) * length, x_mast + 0.45 * length)
-    # Without a wind the sails are set at random (the draws as they always were).
-    side = 1.0 if rng.random() < 0.5 else -1.0
-    max_angle = np.degrees(np.arcsin(min(1.0, 0.4 * beam / boom_len)))
-    angle = np.radians(u(rng, 0.0, min(25.0, max_angle))) * side
-    sails_set = rng.random() < 0.75
-    if d.wind_from_deg is not None:
-        side, angle, sails_set = _trim(d.wind_from_deg)
-    clew = (x_mast - boom_len * np.cos(angle), boom_len * np.sin(angle), boom_z)
-    tack = (x_mast - mast_r, 0.0, boom_z)
-    parts.add("boom", cylinder_between(tack, clew, 0.7 * mast_r), spar)
-    if sails_set:
-        cloth = pick_material(SAIL_CLOTH, rng)
-        head = (x_mast - mast_r, 0.0, deck_m + 0.97 * mast_h)
-        parts.add("sail_main", thin_triangle(tack, head, clew, 0.03), cloth)
-        jib_tack = (
-            form.half_length - 0.03 * length,
-            0.0,
-            _deck_at(form, form.half_length - 0.03 * length) + 0.3,
-        )
-        jib_head = (x_mast + mast_r, 0.0, deck_m + u(rng, 0.75, 0.9) * mast_h)
-        jib_x = x_mast - u(rng, 0.0, 0.1) * length
-        if d.wind_from_deg is None:
-            jib_reach = u(rng, 0.15, 0.4) * beam
-        else:  # sheeted like the main, its foot swung to leeward, at most to the rail's lead
-            swung = (jib_tack[0] - jib_x) * abs(np.sin(angle))
-            jib_reach = float(np.clip(swung, 0.15 * beam, 0.6 * beam))
-        jib_clew = (jib_x, side * jib_reach, deck_m + 0.6)
-        parts.add("sail_jib", thin_triangle(jib_tack, jib_head, jib_clew, 0.03), cloth)
-    else:
-        cover = pick_material(FUNNEL_PAINTS[1:2] + SAIL_CLOTH[2:], rng)
-        parts.add("sail_cover", cylinder_between(tack, clew, 2.5 * mast_r), cover)
-    return parts.to_parts()
-
-
-NO_GO_DEG = 40.0
-"""A sloop cannot sail closer to the wind than about this many degrees off the bow (the "no-go
-zone"): pointing closer, it motors with its sails furled."""
-
-
-def _trim(wind_from_deg: float) -> tuple[float, float, bool]:
-    """How a sloop with the wind ``wind_from_deg`` off its bow (positive: from port) sets its
-    mainsail: the side its boom swings to (+1 port, −1 starboard: always to leeward), the
-    boom's angle off the centreline (rad, signed like the side) and whether the sails are set
-    at all (not inside :data:`NO_GO_DEG`). The boom goes out to about half the wind's angle off
-    the bow, the usual trim from close-hauled (about 20°) through a beam reach (45°) to a run
-    (85°, the most a boom swings before the shrouds); the true wind stands in for the apparent
-    wind, which a moving boat sees further forward."""
-    off_bow = abs(wind_from_deg)
-    side = -1.0 if wind_from_deg > 0.0 else 1.0
-    if off_bow < NO_GO_DEG:
-        return side, side * np.radians(5.0), False
-    return side, side * np.radians(min(0.5 * off_bow, 85.0)), True
-
-
-def build_speedboat(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
-    """Planing motorboat: deep-V hull with a long raked bow and full-width transom; cuddy
-    cabin, centre console with T-top, or open runabout with a windscreen; outboard engines."""
-    length, beam = d.length, d.beam
-    form = HullForm(
-        length=length,
-        beam=beam,
-        draft=d.draft,
-        freeboard=d.freeboard,
-        sheer_fwd=u(rng, 0.15, 0.35) * d.depth,
-        entrance_exponent=u(rng, 1.3, 1.8),
-        transom_width=u(rng, 0.85, 0.98),
-        stem_rake=u(rng, 0.15, 0.25),
-        stem_exponent=1.8,
-        stern_cutup=0.05,
-        transom_immersion=u(rng, 0.85, 1.0),
-        section_exponent=u(rng, 1.0, 1.4),
-        bow_flare=0.15,
-        topside_flare=u(rng, 0.08, 0.15),
-    )
-    hull = pick_material(HULL_PAINTS_SMALL, rng)
-    white = pick_material(SUPERSTRUCTURE_WHITES, rng)
-    glass = WINDOW_GLASS[0]
-    parts = PartSet()
-    parts.add_hull(
-        form,
-        hull,
-        bottom=pick_material(HULL_PAINTS_SMALL + ANTIFOULING_REDS, rng),
-        boot_top_z=u(rng, 0.05, 0.2),
-    )
-    style = ("cuddy", "console", "open")[int(rng.integers(3))]
-    if style == "cuddy":
-        xa, xf = -u(rng, 0.0, 0.1) * length, u(rng, 0.2, 0.3) * length
-        z0, _ = deck_range(form, xa, xf)
-        hw = 0.75 * min_half_beam(form, xa, xf)
-        h = float(np.clip(u(rng, 0.06, 0.08) * length, 0.4, 1.1))
-        parts.add_block(
-            "superstructure",
-            white,
-            xa,
-            xf,
-            hw,
-            z0 - EMBED_M,
-            z0 + h,
-            front_rake=0.7 * (xf - xa),
-            top_inset=0.15 * hw,
-        )
-        _windscreen(parts, xa + 0.3 * (xf - xa), z0 + h, hw * 0.9, glass)
-    elif style == "console":
-        xa, xf = -u(rng, 0.03, 0.08) * length, u(rng, 0.02, 0.06) * length
-        z0, _ = deck_range(form, xa, xf)
-        hw = 0.25 * beam
-        parts.add_block("superstructure", white, xa, xf, hw, z0 - EMBED_M, z0 + 1.1, front_rake=0.3)
-        _windscreen(parts, xf - 0.2, z0 + 1.1, hw, glass)
-        roof_z = z0 + u(rng, 2.1, 2.4)
-        rx0, rx1 = xa - 0.1 * length, xf + 0.02 * length
-        rhw = min(0.38 * beam, min_half_beam(form, rx0, rx1) - 0.1)
-        for x in (rx0 + 0.2, rx1 - 0.2):
-            for s in (-1.0, 1.0):
-                parts.add(
-                    "t_top",
-                    cylinder_between(
-                        (x, s * 0.8 * rhw, z0 - EMBED_M), (x, s * 0.8 * rhw, roof_z), 0.04
-                    ),
-                    white,
-                )
-        parts.add("t_top", box(rx0, rx1, -rhw, rhw, roof_z, roof_z + 0.12), white)
-    else:
-        xw = u(rng, 0.05, 0.15) * length
-        _windscreen(parts, xw, _deck_at(form, xw), 0.8 * min_half_beam(form, xw - 0.5, xw), glass)
-    if length < 12.0 and rng.random() < 0.7:
-        engine = pick_material(
-            (MACHINERY_PAINTS[1], MACHINERY_PAINTS[2], *ANTIFOULING_REDS[2:]), rng
-        )
-        count = 1 if length < 7.0 else 2
-        zt = _deck_at(form, -form.half_length)
-        for i in range(count):
-            # Mounted on the transom inside the overall length (LOA includes the engines).
-            engine_body = tapered_block(
-                -form.half_length,
-                -form.half_length + 0.55,
-                0.22,
-                zt - 0.9,
-                zt + 0.45,
-                aft_rake=0.15,
-            )
-            engine_body.apply_translation([0.0, (i - 0.5 * (count - 1)) * 0.35 * beam, 0.0])
-            parts.add("outboards", engine_body, engine)
-    return parts.to_parts()
-
-
-def _windscreen(parts: PartSet, x: float, z: float, half_width: float, glass: Material) -> None:
-    """Raked windscreen: a thin dark plate leaning aft from (x, z) up 0.5 m."""
-    pts = [(x, s * half_width, z - 0.05) for s in (-1, 1)]
-    pts += [(x - 0.35, s * 0.9 * half_width, z + 0.5) for s in (-1, 1)]
-    pts += [(px - 0.04, py, pz) for px, py, pz in pts]
-    parts.add("windows", convex_body(pts), glass)
