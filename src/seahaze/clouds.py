@@ -119,7 +119,9 @@ EDGE_WIDTHS = np.geomspace(EDGE_HALF_WIDTH, 1.0, 16)
 
 CUT_SAMPLES = 512
 """Samples per side of the square (:data:`CUT_SPAN` lattice spacings) over which the noise's
-distribution is tabulated to place the cut that leaves ``N/8`` covered."""
+distribution is tabulated: its 99th percentile (a cloud's core) and the clouds' mean
+transmission from all of them, the cut that leaves ``N/8`` covered from every other one a side
+(the cut's error is the layer's own sampling, not the samples')."""
 
 CUT_SPAN = 64.0
 """Side of that square in largest-octave lattice spacings."""

@@ -346,6 +346,9 @@ def build_scene(
     mi = _mi()
     haze = spec.haze
     medium = medium or haze_medium(haze, camera.height_m)
+    # The sun and sky, built once for this scene and the clean pass's (a broken sky's image and
+    # its sun's disk irradiance are each a second's work).
+    lights = sky_emitters(spec, geometry.elapsed_s)
     top, bottom = medium.top_m, medium.bottom_m
     sigma_min = min(
         channel_extinction(v, haze.threshold, haze.extinction_spectrum).min()
@@ -378,7 +381,7 @@ def build_scene(
             0.0,
             haze_box,
         ),
-        **sky_emitters(spec, geometry.elapsed_s),
+        **lights,
         HAZE_BOX_ID: {
             "type": "cube",
             "to_world": mi.ScalarTransform4f()
@@ -408,7 +411,7 @@ def build_scene(
             camera, camera.width, camera.height, camera.fov_deg, camera.pitch_deg, False
         )
         clean = {"type": "scene", "integrator": integrator, "sensor": sensor}
-        clean_scene = mi.load_dict({**clean, **sky_emitters(spec, geometry.elapsed_s), **surfaces})
+        clean_scene = mi.load_dict({**clean, **lights, **surfaces})
     loaded = mi.load_dict(scene)
     params = mi.traverse(loaded)
     shape_ids: dict[int, int] = {}
