@@ -314,6 +314,18 @@ def test_physical_is_deterministic_and_reuses_its_kernel(scenes: _Scenes) -> Non
     ]
 
 
+def test_glint_lobe_takes_the_wind_of_a_beaufort_sea() -> None:
+    # A sea given by its Beaufort force (6: 10.8-13.8 m/s, the scale's midpoint) has its
+    # glint as wide as that wind makes it, not as sea.wind_speed's default 7 m/s.
+    from seahaze.ocean import beaufort_wind_speed
+
+    spec = small_spec(sea={"beaufort": 6})
+    loaded, _ = load_flat_scene(spec, haze_box=False)
+    renderer = physical.PhysicalRenderer(loaded, spec)
+    assert renderer.wind_speed == pytest.approx(beaufort_wind_speed(6))
+    assert renderer.wind_speed > 10.0
+
+
 def test_table_sea_mixes_in_foam_by_its_coverage() -> None:
     """The photon table's sea is ``(1 - W)·water + W·Lambertian(ρ)``: all foam gives weight ρ
     and a cosine law (mean cos θ = 2/3); a partial cover adds its share to the water's mean

@@ -27,6 +27,7 @@ from ..haze import Extinction, extinction_rgb
 from ..medium import HazeMedium
 from ..seeds import RenderPass, render_seed
 from ..spec import SceneSpec
+from ..world import wind_speed
 from .diffuse_table import DEFAULT_GRID, UNFOLDED_GRID, TableGrid, build_tables
 from .estimator import DEFAULT_SETTINGS, EstimatorSettings
 from .passes import GeometryPass, render_geometry, render_radiance
@@ -93,7 +94,9 @@ class PhysicalRenderer:
         # span the whole circle of azimuths (folded, the clouds on one side would be averaged
         # with the sky on the other: 2-3 % too little skylight in the haze, measured).
         self.grid = UNFOLDED_GRID if spec.sky.model == "broken" else DEFAULT_GRID
-        self.wind_speed = spec.sea.wind_speed  # the width of the sun glint seen from a hull
+        # The width of the sun glint seen from a hull: the sea's own wind (a Beaufort force
+        # when the scene gives one, as the sea's spectrum and roughness take it).
+        self.wind_speed = wind_speed(spec)
         self.sea = sample_sea_reflectance(
             sea_bsdf(loaded.scene),
             foam_coverage=loaded.sea_foam_coverage,
