@@ -4,14 +4,30 @@ A calibration scene (the sun, sky, haze and camera height of a base scene; a fla
 vessels) gets thin, perfectly black targets standing on the sea at distances from 0.05 V to
 1.5 V, each seen against the horizon sky (:mod:`~seahaze.verify.targets`). Per target the
 apparent contrast ``C = (L_target − L_sky) / L_sky`` is measured and Koschmieder's law
-``C = −exp(−σ d)`` fitted (:mod:`~seahaze.verify.fit`); the measured visibility
-``V = −ln(ε) / σ`` is compared with the label (:mod:`~seahaze.verify.run`) and reported
-(:mod:`~seahaze.verify.report`). docs/physics.md ("Verifying visibility") explains the choices
-and the target-size effect.
+``C = −exp(−σ d)`` fitted (:mod:`~seahaze.verify.fit`; in haze that varies across the sea
+against each target's own reduced length ``ℓ = ∫ρ ds``: :mod:`~seahaze.verify.field`); the
+measured visibility ``V = −ln(ε) / σ`` is compared with the label (:mod:`~seahaze.verify.run`)
+and reported (:mod:`~seahaze.verify.report`). docs/physics.md ("Verifying visibility") explains
+the choices and the target-size effect.
 """
 
 from ..visibility import visibility_from_extinction
-from .fit import Contrasts, Fit, fit_extinction, jackknife_visibility, measure_contrasts
+from .field import (
+    DENSE_RATIO,
+    THIN_RATIO,
+    calibration_medium,
+    coverage,
+    coverage_note,
+    field_names,
+)
+from .fit import (
+    Contrasts,
+    Fit,
+    RayLengths,
+    fit_extinction,
+    jackknife_visibility,
+    measure_contrasts,
+)
 from .report import format_report, plot_contrasts, write_outputs, write_strips
 from .run import (
     DEFAULT_BATCHES,
@@ -50,21 +66,28 @@ __all__ = [
     "DEFAULT_SPP",
     "DEFAULT_TOLERANCE",
     "DEFAULT_VISIBILITY_M",
+    "DENSE_RATIO",
     "FOV_DEG",
     "N_TARGETS",
     "TARGET_TOP_DEG",
     "TARGET_WIDTH_DEG",
+    "THIN_RATIO",
     "Contrasts",
     "Fit",
     "LevelMeasurement",
     "LevelReport",
+    "RayLengths",
     "Target",
     "TargetReport",
     "VerifyInputError",
     "VerifyReport",
     "VerifySettings",
     "analyse_level",
+    "calibration_medium",
     "calibration_spec",
+    "coverage",
+    "coverage_note",
+    "field_names",
     "fit_extinction",
     "format_report",
     "horizon_row",

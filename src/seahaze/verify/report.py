@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import fileio, imaging
-from .run import LevelMeasurement, VerifyReport, finite_json
+from .field import DENSE_RATIO, THIN_RATIO, coverage_note
+from .run import LevelMeasurement, LevelReport, VerifyReport, finite_json
 from .targets import SKY_MIN_OPTICAL_DEPTH, sky_pixels
 
 
@@ -25,19 +26,22 @@ def format_report(report: VerifyReport) -> str:
         lines += [
             "",
             f"{level.name}: V = {level.visibility_m:g} m, sigma = {level.sigma_per_m:.4e} /m",
-            f"  {'target':>6} {'d (m)':>8} {'d/V':>5} {'px':>4} {'C measured':>19} "
-            f"{'C expected':>10} {'z':>6}",
+            f"  {'target':>6} {'d (m)':>8} {'d/V':>5} {'ℓ/d':>5} {'px':>4} {'C measured':>19} "
+            f"{'C expected':>10} {'z':>6} {'tau meas':>8} {'tau exp':>7} {'ratio':>6}",
         ]
         for t in level.targets:
             lines.append(
-                f"  {t.index:>6} {t.distance_m:>8.1f} {t.fraction_of_v:>5.2f} {t.pixels:>4} "
-                f"{t.contrast:>9.4f} ± {t.stderr:<7.4f} {t.expected:>10.4f} {t.z:>6.1f}"
+                f"  {t.index:>6} {t.distance_m:>8.1f} {t.fraction_of_v:>5.2f} "
+                f"{t.mean_density:>5.2f} {t.pixels:>4} {t.contrast:>9.4f} ± {t.stderr:<7.4f} "
+                f"{t.expected:>10.4f} {t.z:>6.1f} {t.tau_measured:>8.4f} {t.tau_expected:>7.4f} "
+                f"{t.tau_ratio:>6.3f}"
             )
         lines.append(
             f"  V measured {level.measured_m:.1f} m ± {level.stderr_fit_m:.1f} (fit) "
             f"± {level.stderr_jackknife_m:.1f} (jackknife); error {level.error:+.2%}, "
             f"chi2/dof {level.chi2_per_dof:.2f}, {level.informative_targets} targets > 3 se"
         )
+        lines += _coverage_lines(level)
     lines += [
         "",
         f"{'level':<7} {'V label':>8} {'V measured':>11} {'± se':>7} {'error':>8} "
@@ -68,6 +72,19 @@ def format_report(report: VerifyReport) -> str:
     return "\n".join(lines)
 
 
+def _coverage_lines(level: LevelReport) -> list[str]:
+    """Where the haze varies across the sea: how many targets stand in dense and thin haze,
+    and a note when they all stand on one side."""
+    if not level.varies_across:
+        return []
+    lines = [
+        f"  across the sea: {level.dense_targets} of {len(level.targets)} targets in dense haze "
+        f"(ℓ/d > {DENSE_RATIO:g}), {level.thin_targets} in thin (ℓ/d < {THIN_RATIO:g})"
+    ]
+    note = coverage_note(level.dense_targets, level.thin_targets, len(level.targets))
+    return lines + ([f"  note: {note}"] if note else [])
+
+
 def write_outputs(
     report: VerifyReport, out: Path, measurements: dict[str, LevelMeasurement] | None = None
 ) -> list[Path]:
@@ -90,7 +107,8 @@ def write_outputs(
 
 
 def plot_contrasts(report: VerifyReport, path: Path) -> None:
-    """Measured ``|C|`` against distance per level, with Koschmieder's and the fitted curve."""
+    """Measured ``|C|`` against each target's reduced length ``ℓ`` (its distance in uniform
+    haze) per level, with Koschmieder's ``exp(−σℓ)`` and the fitted curve."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -104,11 +122,11 @@ def plot_contrasts(report: VerifyReport, path: Path) -> None:
     )
     eps = report.config["contrast_threshold"]
     for ax, level in zip(axes.flat, report.levels, strict=False):
-        d = np.array([t.distance_m for t in level.targets])
+        d = np.array([t.reduced_m for t in level.targets])
         c = -np.array([t.contrast for t in level.targets])
         se = np.array([t.stderr for t in level.targets])
-        x = np.linspace(0.0, 1.6 * level.visibility_m, 200)
-        ax.plot(x, np.exp(-level.sigma_per_m * x), "k-", lw=1, label="exp(-σd), label V")
+        x = np.linspace(0.0, max(1.6 * level.visibility_m, 1.05 * float(np.max(d))), 200)
+        ax.plot(x, np.exp(-level.sigma_per_m * x), "k-", lw=1, label="exp(-σℓ), label V")
         if math.isfinite(level.measured_m):
             sigma_fit = -math.log(eps) / level.measured_m
             ax.plot(x, np.exp(-sigma_fit * x), "C1--", lw=1, label="fit")
@@ -127,7 +145,7 @@ def plot_contrasts(report: VerifyReport, path: Path) -> None:
         ax.axvline(level.visibility_m, color="0.6", lw=0.8, ls=":")
         ax.set_yscale("log")
         ax.set_ylim(max(1e-4, 0.2 * eps * math.exp(-0.5 * 3.9)), 1.5)
-        ax.set_xlabel("distance d (m)")
+        ax.set_xlabel("reduced length ℓ = ∫ρ ds (m; the distance in uniform haze)")
         ax.set_ylabel("|C|")
         verdict = "PASS" if level.passed else "FAIL"
         ax.set_title(

@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import imaging
 from ..camera import Camera
+from ..medium import HazeMedium
 from ..render.engine import open_session
 from ..render.variant import select_variant
 from ..seeds import RenderPass, render_seed
@@ -26,7 +27,22 @@ from ..visibility import (
     level_name,
 )
 from ..world import SceneGeometry, Sea, build_sea
-from .fit import fit_extinction, jackknife_visibility, measure_contrasts, visibility_or_nan
+from .field import (
+    calibration_medium,
+    check_mode,
+    coverage,
+    open_field_session,
+    optical_depth_ratio,
+    target_ray_lengths,
+)
+from .fit import (
+    Contrasts,
+    RayLengths,
+    fit_extinction,
+    jackknife_visibility,
+    measure_contrasts,
+    visibility_or_nan,
+)
 from .targets import (
     DEFAULT_RESOLUTION,
     FOV_DEG,
@@ -50,6 +66,10 @@ DEFAULT_VISIBILITY_M = 1000.0
 DEFAULT_SPP = 4096
 DEFAULT_BATCHES = 16
 DEFAULT_TOLERANCE = 0.05
+FIELD_SEEN = (
+    "the base scene's patches and bank at its first frame, normalised over its own view "
+    "(seahaze.verify.field)"
+)
 
 
 def finite_json(data: Any) -> Any:
@@ -78,12 +98,26 @@ class TargetReport:
     contrast: float
     stderr: float
     expected: float
-    """Koschmieder's ``-exp(-sigma d)``."""
+    """Koschmieder's ``-exp(-σ ℓ)`` of its own rays (the mean over its measured pixels';
+    ``-exp(-σ d)`` in a uniform layer)."""
+    reduced_m: float = math.nan
+    """Mean reduced length ``ℓ = ∫ρ ds`` (m) along the rays of its measured pixels."""
+    mean_density: float = math.nan
+    """``ℓ / d``: the mean relative density along its rays (> 1 in a dense patch)."""
+    tau_measured: float = math.nan
+    """``-ln(-C)``: the optical depth its contrast reads (NaN where ``C >= 0``)."""
+    tau_expected: float = math.nan
+    """``σ ℓ`` (exactly: ``-ln`` of its rays' mean transmittance)."""
 
     @property
     def z(self) -> float:
         """(measured - expected) / standard error."""
         return (self.contrast - self.expected) / self.stderr if self.stderr > 0 else math.nan
+
+    @property
+    def tau_ratio(self) -> float:
+        """``tau_measured / tau_expected``: 1 where the target reads its own ray's law."""
+        return optical_depth_ratio(self.tau_measured, self.tau_expected)
 
 
 @dataclass
@@ -102,7 +136,15 @@ class LevelReport:
     seconds: float
     targets: list[TargetReport] = field(default_factory=list)
     sky_optical_depth: float = math.inf
-    """Optical depth of the haze along the highest measured sky ray, up to the layer top."""
+    """Optical depth of the haze along the highest measured sky ray, up to the layer top (in
+    haze that varies across the sea: the least over the measured sky rays, to 20 km)."""
+    varies_across: bool = False
+    """Whether the haze varies across the sea (patches, a bank): the fit is then against
+    each target's own reduced length and the coverage below matters."""
+    dense_targets: int = 0
+    """Targets whose rays' mean density ``ℓ/d`` exceeds :data:`~.field.DENSE_RATIO`."""
+    thin_targets: int = 0
+    """Targets whose rays' mean density ``ℓ/d`` is below :data:`~.field.THIN_RATIO`."""
 
     @property
     def error(self) -> float:
@@ -127,7 +169,7 @@ class LevelReport:
             error=self.error,
             stderr_m=self.stderr_m,
             passed=self.passed,
-            targets=[{**asdict(t), "z": t.z} for t in self.targets],
+            targets=[{**asdict(t), "z": t.z, "tau_ratio": t.tau_ratio} for t in self.targets],
         )
         return finite_json(data)
 
@@ -139,13 +181,22 @@ class LevelMeasurement:
     targets: list[Target]
     distance_m: np.ndarray
     """Mean distance (m) along each target's measured rays."""
-    reduced_m: np.ndarray
-    """Mean reduced length (m) in the medium along the same rays: a target's optical depth
+    rays: RayLengths
+    """Reduced length (m) in the medium of each target's measured rays: a ray's optical depth
     is ``σ`` times it (:mod:`seahaze.medium`; its distance in a uniform layer)."""
     luminance: np.ndarray
     """(B, H, W) per-batch luminance."""
     radiance: np.ndarray
     """(H, W, 3) mean linear radiance over the batches (for the strip image)."""
+    sky_reduced_m: float = math.inf
+    """Least reduced length (m) over the measured sky rays (to 20 km)."""
+    varies_across: bool = False
+    """Whether the medium varies across the sea (:mod:`seahaze.verify.field`)."""
+
+    @property
+    def reduced_m(self) -> np.ndarray:
+        """(N,) mean reduced length (m) along each target's measured rays."""
+        return self.rays.mean_m
 
 
 def render_level_batches(
@@ -156,9 +207,12 @@ def render_level_batches(
     batches: int,
     width_deg: float = TARGET_WIDTH_DEG,
     denoise: bool = False,
+    medium: HazeMedium | None = None,
 ) -> LevelMeasurement:
     """Render the calibration scene of one level ``batches`` times with independent seeds;
-    ``denoise``: each batch's radiance through the denoiser, as a dataset's PNGs."""
+    ``denoise``: each batch's radiance through the denoiser, as a dataset's PNGs; ``medium``:
+    the haze to render (the base scene's, where it varies across the sea:
+    :func:`seahaze.verify.field.calibration_medium`), default the one ``spec`` describes."""
     camera = Camera.from_spec(spec.camera)
     haze = spec.haze
     targets = layout_targets(camera, visibility_m, width_deg=width_deg)
@@ -167,14 +221,15 @@ def render_level_batches(
     farthest = max(t.distance_m for t in targets) + max(t.width_m for t in targets)
     # The haze box reaches past the farthest target, so the light around it is an unbounded
     # layer's (the physical mode needs no box).
-    session = open_session(
-        with_overrides(spec, levels=[visibility_m]),
-        geometry,
-        black_vessels=True,
-        reach_m=farthest,
-    )
+    level_spec = with_overrides(spec, levels=[visibility_m])
+    if medium is None:
+        session = open_session(level_spec, geometry, black_vessels=True, reach_m=farthest)
+    else:
+        session = open_field_session(level_spec, geometry, medium, farthest)
     distances = _check_target_pixels(session.pixels, targets)
-    reduced = _mean_over_targets(session.pixels.haze_path_length(session.loaded.medium), targets)
+    # Exact per-pixel reduced lengths (NonUniformHaze.ray_path_length across the sea).
+    per_pixel = session.pixels.haze_path_length(session.loaded.medium)
+    rays, sky = target_ray_lengths(per_pixel, targets)
     sigma = channel_extinction(visibility_m, haze.threshold, haze.extinction_spectrum)
     spp = max(1, spec.render.spp // batches)
     clean = session.render_clean(spp)
@@ -197,8 +252,9 @@ def render_level_batches(
         lum.append(imaging.luminance(radiance))
         total += radiance
     luminance = np.stack(lum)
+    radiance = (total / batches).astype(np.float32)
     return LevelMeasurement(
-        targets, distances, reduced, luminance, (total / batches).astype(np.float32)
+        targets, distances, rays, luminance, radiance, float(sky.min()), medium is not None
     )
 
 
@@ -235,29 +291,16 @@ def analyse_level(
 ) -> LevelReport:
     """Contrasts, fit and jackknife of one level's batches."""
     sigma = extinction_coefficient(visibility_m, threshold)
-    # Koschmieder's law in the medium: a black target's contrast is −exp(−σ ℓ), ℓ its reduced
-    # length (its distance in a uniform layer).
-    d = measurement.reduced_m
+    # Koschmieder's law in the medium: a black target's contrast is −exp(−σ ℓ), ℓ the reduced
+    # length of its own ray (its distance in a uniform layer), averaged over its pixels' rays.
+    rays = measurement.rays
     stats = measure_contrasts(measurement.luminance, measurement.targets)
-    fit = fit_extinction(d, stats.contrast, stats.stderr)
+    fit = fit_extinction(rays, stats.contrast, stats.stderr)
     measured = visibility_or_nan(fit.sigma, threshold)
     stderr_fit = measured * fit.sigma_se / fit.sigma if math.isfinite(measured) else math.nan
-    jack = jackknife_visibility(measurement.luminance, measurement.targets, d, threshold)
-    targets = [
-        TargetReport(
-            t.index,
-            float(measurement.distance_m[i]),
-            float(measurement.distance_m[i] / visibility_m),
-            t.width_m,
-            t.top_m,
-            int(stats.target_pixels[i]),
-            int(stats.sky_pixels[i]),
-            float(stats.contrast[i]),
-            float(stats.stderr[i]),
-            float(-math.exp(-sigma * d[i])),
-        )
-        for i, t in enumerate(measurement.targets)
-    ]
+    jack = jackknife_visibility(measurement.luminance, measurement.targets, rays, threshold)
+    targets = _target_reports(measurement, stats, sigma, visibility_m)
+    dense, thin = coverage([t.mean_density for t in targets])
     return LevelReport(
         name,
         visibility_m,
@@ -271,7 +314,42 @@ def analyse_level(
         seconds,
         targets,
         sky_optical_depth,
+        measurement.varies_across,
+        dense,
+        thin,
     )
+
+
+def _target_reports(
+    measurement: LevelMeasurement, stats: Contrasts, sigma: float, visibility_m: float
+) -> list[TargetReport]:
+    """Per target its distance, reduced length, measured and expected contrast and optical
+    depth at extinction ``sigma`` (1/m)."""
+    rays = measurement.rays
+    expected_tau = rays.optical_depth(sigma)
+    reports = []
+    for i, t in enumerate(measurement.targets):
+        d, reduced = float(measurement.distance_m[i]), float(rays.mean_m[i])
+        c = float(stats.contrast[i])
+        reports.append(
+            TargetReport(
+                t.index,
+                d,
+                d / visibility_m,
+                t.width_m,
+                t.top_m,
+                int(stats.target_pixels[i]),
+                int(stats.sky_pixels[i]),
+                c,
+                float(stats.stderr[i]),
+                -math.exp(-float(expected_tau[i])),
+                reduced,
+                reduced / d,
+                -math.log(-c) if c < 0 else math.nan,
+                float(expected_tau[i]),
+            )
+        )
+    return reports
 
 
 @dataclass
@@ -343,6 +421,7 @@ def run_verify(
     """
     settings = settings or VerifySettings()
     settings.check()
+    check_mode(base, settings.mode)
     if not visibilities_m:
         raise VerifyInputError("no visibility level to verify")
     if base.camera.height_m >= base.haze.top_m:
@@ -365,15 +444,19 @@ def run_verify(
     start = time.perf_counter()
     used_variant = select_variant(spec.render.variant)
     sea = build_sea(spec, camera)
+    # Haze across the sea: the base scene's field, not one normalised over the 24° camera.
+    medium = calibration_medium(base)
     threshold = spec.haze.threshold
     levels = []
     for i, v in enumerate(visibilities_m):
         t0 = time.perf_counter()
         name = level_name(v)
         measurement = render_level_batches(
-            spec, sea, v, i, settings.batches, width, settings.denoise
+            spec, sea, v, i, settings.batches, width, settings.denoise, medium
         )
         tau = sky_optical_depth(spec, v)
+        if medium is not None:
+            tau = extinction_coefficient(v, threshold) * measurement.sky_reduced_m
         seconds = time.perf_counter() - t0
         report = analyse_level(name, v, threshold, measurement, settings.tolerance, seconds, tau)
         if keep is not None:
@@ -384,6 +467,8 @@ def run_verify(
             f"in {report.seconds:.1f} s"
         )
     config = _run_config(spec, settings, used_variant, sea.roughness, visibilities_m[0])
+    if medium is not None:
+        config["medium"] = {**medium.describe(), "field": FIELD_SEEN}
     return VerifyReport(config, levels, time.perf_counter() - start)
 
 

@@ -1,0 +1,130 @@
+"""Verify in haze that varies across the sea (``haze.patches``, ``haze.bank``).
+
+In such a medium Koschmieder's law holds ray by ray: a black target seen against the horizon
+sky has the contrast ``C = −exp(−τ)`` of its own ray, ``τ = σ ℓ`` with ``ℓ = ∫ρ ds`` the
+reduced length from the camera to the target (:class:`seahaze.nonuniform.NonUniformHaze`,
+whose density averages 1 over the view's horizontal fan). Inside a dense patch ``ℓ/d > 1``, in
+a clear gap ``ℓ/d < 1``: the targets then read different visibilities, and the fit of ``σ``
+against ``ℓ`` instead of ``d`` measures the level's extinction.
+
+Which field: the calibration scene is the base scene's camera on a flat sea, but its camera is
+24° wide, and :func:`seahaze.scene_medium.scene_haze_medium` normalises the field over the
+camera's own view and seeds the patches from ``render.seed``. The calibration scene therefore
+renders the *base scene's* medium (:func:`calibration_medium`): its patches (seeded by the
+scene's seed, whatever ``--seed`` renders with), its bank placed from the camera's start, its
+normalisation over the scene's own view, at the scene's first frame (time 0 of a drift).
+docs/physics.md ("Verifying visibility in haze that varies across the sea").
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..camera import Camera
+from ..medium import HazeMedium
+from ..nonuniform import NonUniformHaze
+from ..render import passes
+from ..render.engine import SceneSession
+from ..render.scene import build_scene
+from ..render.variant import select_variant
+from ..scene_medium import scene_haze_medium
+from ..spec import RENDER_MODES, SceneSpec
+from ..world import SceneGeometry
+from .fit import RayLengths
+from .targets import Target, VerifyInputError, sky_pixels, target_pixels
+
+DENSE_RATIO = 1.15
+"""A target whose ray's mean density ``ℓ/d`` exceeds this stands in dense haze (a patch)."""
+THIN_RATIO = 0.87
+"""A target whose ray's mean density ``ℓ/d`` is below this stands in thin haze (a gap)."""
+FIELD_FIELDS = ("patches", "bank")
+"""The ``haze`` fields that make the haze vary across the sea."""
+
+
+def field_names(spec: SceneSpec) -> list[str]:
+    """The ``haze.*`` fields of ``spec`` that vary the haze across the sea."""
+    return [f"haze.{name}" for name in FIELD_FIELDS if getattr(spec.haze, name) is not None]
+
+
+def check_mode(spec: SceneSpec, mode: str) -> None:
+    """Raise :class:`VerifyInputError` (one line) when ``mode`` cannot render ``spec``'s haze."""
+    names = field_names(spec)
+    if mode == "physical" and names:
+        allowed = ", ".join(m for m in RENDER_MODES if m != "physical")
+        raise VerifyInputError(
+            f"--mode physical: the scene's {' and '.join(names)} (haze that varies across the "
+            f"sea) the physical mode does not render; allowed modes: {allowed}"
+        )
+
+
+def calibration_medium(base: SceneSpec) -> NonUniformHaze | None:
+    """The base scene's medium at its first frame where it varies across the sea, else None
+    (the calibration scene's own medium is then the same: it varies with height alone)."""
+    medium = scene_haze_medium(base, Camera.from_spec(base.camera))
+    return medium if isinstance(medium, NonUniformHaze) else None
+
+
+def open_field_session(
+    spec: SceneSpec, geometry: SceneGeometry, medium: HazeMedium, reach_m: float
+) -> SceneSession:
+    """The calibration scene loaded with ``medium`` (the base scene's) and its geometry pass:
+    :func:`seahaze.render.engine.open_session` builds the medium from the spec it is given,
+    whose 24° camera would renormalise the field (module docstring)."""
+    variant = select_variant(spec.render.variant)
+    camera = Camera.from_spec(spec.camera)
+    loaded = build_scene(
+        spec,
+        camera,
+        geometry,
+        list(spec.haze.levels),
+        black_vessels=True,
+        haze_box=spec.render.mode != "physical",
+        reach_m=reach_m,
+        medium=medium,
+    )
+    pixels = passes.render_geometry(loaded)
+    return SceneSession(spec, variant, camera, geometry, loaded, pixels)
+
+
+def target_ray_lengths(
+    reduced_m: np.ndarray, targets: Sequence[Target]
+) -> tuple[RayLengths, np.ndarray]:
+    """Per target the reduced lengths of its measured pixels' rays, from the per-pixel
+    reduced length ``reduced_m`` (H, W; m) of the geometry pass, and the least reduced length
+    (m) over each target's measured sky rays."""
+    rays, sky = [], []
+    for t in targets:
+        rows, cols = target_pixels(t)
+        rays.append(np.asarray(reduced_m[rows, cols], np.float64).ravel())
+        s_rows, s_cols = sky_pixels(t)
+        sky.append(float(np.min(reduced_m[s_rows][:, s_cols])))
+    return RayLengths.of(rays), np.array(sky)
+
+
+def coverage(mean_density: Sequence[float]) -> tuple[int, int]:
+    """How many targets stand in dense haze (``ℓ/d`` > :data:`DENSE_RATIO`) and in thin haze
+    (< :data:`THIN_RATIO`)."""
+    ratios = np.asarray(mean_density, np.float64)
+    return int(np.sum(ratios > DENSE_RATIO)), int(np.sum(ratios < THIN_RATIO))
+
+
+def coverage_note(dense: int, thin: int, count: int) -> str | None:
+    """A note when the layout puts every target on one side of the mean density, else None."""
+    if dense and thin:
+        return None
+    sides = [f"dense haze (ℓ/d > {DENSE_RATIO:g})"] if not dense else []
+    sides += [f"thin haze (ℓ/d < {THIN_RATIO:g})"] if not thin else []
+    return (
+        f"no target of {count} in {' nor in '.join(sides)}: this level tests the law on one "
+        "side of the field only"
+    )
+
+
+def optical_depth_ratio(measured: float, expected: float) -> float:
+    """``τ_measured / τ_expected``, NaN where either is not a positive finite number."""
+    if not (math.isfinite(measured) and math.isfinite(expected)) or expected <= 0:
+        return math.nan
+    return measured / expected
