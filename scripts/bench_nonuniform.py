@@ -6,8 +6,13 @@ section alone changes: patches (correlation 250 m, anisotropy 3, vertical 50 m, 
 20), a bank (edge at 1 km, bearing 20°, edge scale 60 m, near ratio 0.15), and for the box a
 bank off to the side (bearing 60°).
 
-(a) The ``reference`` mode's grid. The reference renders a Mitsuba ``heterogeneous`` medium
-    over the density sampled at the centres of ``seahaze.nonuniform.GRID_SHAPE`` cells over the
+Until 2026-11-28 the ``reference`` mode path-traced a grid of the density; it now evaluates
+the field exactly (``seahaze.render.field_medium``; scripts/bench_field_medium.py measures it).
+The tables in docs/benchmarks.md were measured with the grid; rerun, (b) compares the exact
+reference with the grid model, and (a) says what a grid would resolve.
+
+(a) The grid. The reference rendered a Mitsuba ``heterogeneous`` medium
+    over the density sampled at the centres of ``GRID_SHAPE`` cells over the
     haze box, trilinearly interpolated and clamped at the outer centres (checked here against
     the extinction of the reference's own Mitsuba medium at random points of a loaded scene).
     For every pixel-centre ray the optical depth through that interpolant, integrated exactly
@@ -87,6 +92,10 @@ HAZES = {
     "bank at 60°": BANK_SIDE,
 }
 """The haze sections compared (merged into the scene's ``haze``)."""
+GRID_SHAPE = (32, 384, 384)
+"""The grid of the density the ``reference`` mode path-traced until 2026-11-28 (z, y, x cells
+over the haze box); it now evaluates the field exactly (seahaze.render.field_medium, measured
+by scripts/bench_field_medium.py). (a) keeps measuring what such grids resolve."""
 COARSE_SHAPE = (16, 192, 192)
 FINER_SHAPES = ((64, 384, 384), (32, 768, 768))
 FINEST_SHAPE = (64, 768, 768)
@@ -265,33 +274,41 @@ def trilinear(grid: np.ndarray, box_min: np.ndarray, cell: np.ndarray, p: np.nda
     return out
 
 
+def grid_medium(medium: Any, rays: Rays, sigma: float) -> Any:
+    """A Mitsuba ``heterogeneous`` medium over ``medium``'s density at GRID_SHAPE cells over
+    the rays' haze box, at extinction ``sigma`` (the reference's medium until 2026-11-28)."""
+    import mitsuba as mi
+
+    from seahaze.medium import grid_medium_dict
+
+    grid = medium.density_grid_over(rays.box_min, rays.box_max, GRID_SHAPE)
+    volume = mi.VolumeGrid((grid[..., None] * np.float32(sigma)).astype(np.float32))
+    return mi.load_dict(grid_medium_dict(volume, rays.box_min, rays.box_max, 0.0, 0.75))
+
+
 def check_against_mitsuba(points: int = 20_000) -> dict[str, float]:
-    """The grid model against the reference's own medium: the patchy scene loaded for the
-    ``reference`` mode at the clearest graded level, Mitsuba's extinction at random points of
-    its haze box (``Medium.get_scattering_coefficients``) against σ times :func:`trilinear` of
+    """The grid model against a Mitsuba grid medium of it: the patchy scene's box at the
+    clearest graded level, Mitsuba's extinction at random points of its haze box
+    (``Medium.get_scattering_coefficients``) against σ times :func:`trilinear` of
     ``density_grid_over`` the box at GRID_SHAPE; and its majorant against σ times the grid's
     largest value (delta tracking is unbiased only with a majorant at least the largest)."""
     import drjit as dr
     import mitsuba as mi
 
-    from seahaze.nonuniform import GRID_SHAPE
     from seahaze.render.engine import open_session
-    from seahaze.render.scene import HAZE_BOX_ID
 
     spec = scene_spec(PATCHY, width=64, height=36, levels=graded_levels(), mode="reference")
     session = open_session(spec)
-    rays, loaded = session_rays(session), session.loaded
+    rays = session_rays(session)
     sigma = sigma_of(max(graded_levels()))
-    loaded.set_haze(sigma, 0.0, 0.75)
-    box = next(shape for shape in loaded.scene.shapes() if shape.id() == HAZE_BOX_ID)
-    medium = box.interior_medium()
+    medium = grid_medium(session.loaded.medium, rays, sigma)
     rng = np.random.default_rng(0)
     p = rng.uniform(rays.box_min, rays.box_max, (points, 3))
     mei = dr.zeros(mi.MediumInteraction3f, points)
     mei.p = mi.Point3f(p[:, 0], p[:, 1], p[:, 2])
     mei.medium = mi.MediumPtr(medium)
     got = np.array(medium.get_scattering_coefficients(mei, True)[2])[0]
-    grid = loaded.medium.density_grid_over(rays.box_min, rays.box_max, GRID_SHAPE)
+    grid = session.loaded.medium.density_grid_over(rays.box_min, rays.box_max, GRID_SHAPE)
     cell = (rays.box_max - rays.box_min) / np.array(GRID_SHAPE[::-1])
     want = sigma * trilinear(grid, rays.box_min, cell, p)
     majorant = float(np.array(medium.get_majorant(mei))[0][0])
@@ -458,8 +475,7 @@ def grid_row(case: GridCase, label: str, lengths: np.ndarray, extra: dict[str, A
 
 def grid_rows(case: GridCase, shapes: list[tuple[int, int, int]]) -> list[dict]:
     """(a) for one scene: uniform grids of ``shapes`` over its box, then
-    :data:`seahaze.nonuniform.GRID_SHAPE` with a fine grid nested around the camera."""
-    from seahaze.nonuniform import GRID_SHAPE
+    :data:`GRID_SHAPE` with a fine grid nested around the camera."""
 
     rays, medium = case.rays, case.medium
     rows = []
@@ -540,7 +556,6 @@ def level_box_rows(case: GridCase, levels: list[float]) -> list[dict]:
     at GRID_SHAPE: the largest error of the transmittance against the exact one to 20 km (grid
     and wall together)."""
     from seahaze.haze import haze_box_half_width
-    from seahaze.nonuniform import GRID_SHAPE
     from seahaze.render.scene import BOX_LAYER_WIDTHS
 
     rays, medium = case.rays, case.medium
@@ -595,15 +610,13 @@ def wall_row(case: GridCase) -> dict:
 def grid_memory_mib() -> dict[str, float]:
     """Resident memory (MiB) that loading the patchy scene's medium at GRID_SHAPE into Mitsuba
     adds (the density grid, its RGB copy, Mitsuba's volume), and its build time."""
-    import mitsuba as mi
-
     from seahaze.render.engine import open_session
 
     session = open_session(scene_spec(PATCHY, width=64, height=36, levels=graded_levels()))
     rays, medium = session_rays(session), session.loaded.medium
     before = reset_peak()
     start = time.perf_counter()
-    loaded = mi.load_dict(medium.mitsuba_medium(rays.box_min, rays.box_max))
+    loaded = grid_medium(medium, rays, 1.0)
     seconds = time.perf_counter() - start
     after = proc_status_mib("VmRSS")
     del loaded
@@ -622,7 +635,6 @@ def transmittance_rows(
     """(b) for one scene: per level and band of elevation, the mean transmittance of the sky
     pixels by the reference (albedo 0, ``I / J``), by the exact map and by the grid model;
     ``seed`` another render seed (which also seeds the patches: for the bank only)."""
-    from seahaze.nonuniform import GRID_SHAPE
     from seahaze.render.engine import render_scene
     from seahaze.scene_medium import scene_haze_medium
     from seahaze.spec import with_overrides
@@ -850,7 +862,6 @@ def panel_row(name: str, haze: dict[str, Any], res: tuple[int, int]) -> dict:
 # -- the section ----------------------------------------------------------------------------------
 def section(results: dict[str, Any], quick: bool) -> list[str]:
     """The markdown of the benchmarks.md block."""
-    from seahaze.nonuniform import GRID_SHAPE
 
     a_res, b, check = results["a_res"], results["b"], results["mitsuba_check"]
     lines = [
@@ -994,7 +1005,6 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="smaller sizes, fewer samples")
     parser.add_argument("--doc", action="store_true", help="write docs/benchmarks.md's section")
     args = parser.parse_args()
-    from seahaze.nonuniform import GRID_SHAPE
     from seahaze.render.variant import select_variant
 
     quick = args.quick

@@ -39,6 +39,13 @@ import numpy as np
 
 OCTAVES = 3
 """Octaves of the patches' fractal noise."""
+OCTAVE_SEED_STEP = 7919
+"""Octave ``k`` of the noise hashes with seed ``seed + k·7919`` (a prime: unrelated octaves)."""
+LATTICE_MULTIPLIERS = (0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9)
+"""Odd 64-bit multipliers that spread a lattice point's x, y and z over the hash's bits."""
+SPLITMIX_FINALISER = ((30, 0xBF58476D1CE4E5B9), (27, 0x94D049BB133111EB), 31)
+"""SplitMix64's finaliser (Steele et al. 2014, "Fast splittable pseudorandom number
+generators", OOPSLA): xor-shift by 30, multiply, by 27, multiply, by 31."""
 
 
 @dataclass(frozen=True)
@@ -158,7 +165,8 @@ def fractal_noise(qx: np.ndarray, qy: np.ndarray, qz: np.ndarray, seed: int) -> 
     weight_sum = 0.0
     for octave in range(OCTAVES):
         scale, weight = 2.0**octave, 0.5**octave
-        total += weight * value_noise(qx * scale, qy * scale, qz * scale, seed + 7919 * octave)
+        octave_seed = seed + OCTAVE_SEED_STEP * octave
+        total += weight * value_noise(qx * scale, qy * scale, qz * scale, octave_seed)
         weight_sum += weight
     return total / weight_sum
 
@@ -184,16 +192,18 @@ def value_noise(qx: np.ndarray, qy: np.ndarray, qz: np.ndarray, seed: int) -> np
 def lattice_value(ix: np.ndarray, iy: np.ndarray, iz: np.ndarray, seed: int) -> np.ndarray:
     """A value in ``[−1, 1]`` for each integer lattice point, from a 64-bit integer hash
     (SplitMix64's finaliser) of the point and ``seed``: the same everywhere, every time."""
+    mx, my, mz = (np.uint64(m) for m in LATTICE_MULTIPLIERS)
+    (shift1, mul1), (shift2, mul2), shift3 = SPLITMIX_FINALISER
     with np.errstate(over="ignore"):
-        h = np.asarray(ix, np.int64).astype(np.uint64) * np.uint64(0x9E3779B97F4A7C15)
-        h ^= np.asarray(iy, np.int64).astype(np.uint64) * np.uint64(0xC2B2AE3D27D4EB4F)
-        h ^= np.asarray(iz, np.int64).astype(np.uint64) * np.uint64(0x165667B19E3779F9)
+        h = np.asarray(ix, np.int64).astype(np.uint64) * mx
+        h ^= np.asarray(iy, np.int64).astype(np.uint64) * my
+        h ^= np.asarray(iz, np.int64).astype(np.uint64) * mz
         h ^= np.uint64(seed & 0xFFFFFFFFFFFFFFFF)
-        h ^= h >> np.uint64(30)
-        h *= np.uint64(0xBF58476D1CE4E5B9)
-        h ^= h >> np.uint64(27)
-        h *= np.uint64(0x94D049BB133111EB)
-        h ^= h >> np.uint64(31)
+        h ^= h >> np.uint64(shift1)
+        h *= np.uint64(mul1)
+        h ^= h >> np.uint64(shift2)
+        h *= np.uint64(mul2)
+        h ^= h >> np.uint64(shift3)
     return (h >> np.uint64(11)).astype(np.float64) * (2.0 / 2.0**53) - 1.0
 
 

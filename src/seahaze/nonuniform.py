@@ -24,9 +24,9 @@ Optical depths
     to Simpson's rule on 0.1 m steps within 1e-4.
 
 Modes
-    ``asm`` composites with these per-pixel optical depths; ``reference`` path-traces a
-    heterogeneous Mitsuba medium over a grid of the density (:data:`GRID_SHAPE` cells over the
-    haze box, linearly interpolated: its resolution limits how small a patch it resolves). The
+    ``asm`` composites with these per-pixel optical depths; ``reference`` path-traces the
+    field itself, evaluated exactly in the render kernel
+    (:class:`seahaze.render.field_medium.FieldMedium`: no grid, only Monte Carlo noise). The
     ``physical`` mode's estimators rest on a density that varies with height alone and do not
     render this medium (the scene file is refused with that reason).
 """
@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from .haze_field import HazeField
-from .medium import NUMPY, ArrayOps, HazeMedium, grid_medium_dict
+from .medium import NUMPY, ArrayOps, HazeMedium
 
 RAY_REACH_M = 20_000.0
 """How far a ray is followed (m; the sky's rays end here): every graded level's transmittance
@@ -52,8 +52,6 @@ VIEW_REACH_M = 4000.0
 visibility."""
 FAN_AZIMUTHS = 64
 """Azimuths of the view's horizontal fan (midpoints across the field of view)."""
-GRID_SHAPE = (32, 384, 384)
-"""The ``reference`` mode's grid of the density (z, y, x cells over the haze box)."""
 GAUSS_NODES = np.array([-math.sqrt(0.6), 0.0, math.sqrt(0.6)])
 GAUSS_WEIGHTS = np.array([5.0, 8.0, 5.0]) / 9.0
 MAX_POINTS_PER_CHUNK = 1 << 20
@@ -80,10 +78,7 @@ class NonUniformHaze(HazeMedium):
     profile: HazeMedium
     field: HazeField
     scale: float = 1.0
-    # The reference grid and the last rays' path lengths (not part of the medium's identity).
-    _grid_cache: dict[str, np.ndarray] = dataclass_field(
-        default_factory=dict, compare=False, repr=False
-    )
+    # The last rays' path lengths (not part of the medium's identity).
     _lengths_cache: dict[str, np.ndarray] = dataclass_field(
         default_factory=dict, compare=False, repr=False
     )
@@ -105,7 +100,7 @@ class NonUniformHaze(HazeMedium):
         return self.profile.top
 
     def with_optics(self, albedo: float, g: float) -> HazeMedium:
-        # The same density: the grid and the path lengths still hold.
+        # The same density: the cached path lengths still hold.
         return replace(self, profile=self.profile.with_optics(albedo, g))
 
     # -- the density and optical depths ------------------------------------------------------
@@ -196,27 +191,20 @@ class NonUniformHaze(HazeMedium):
         return float(means.min())
 
     # -- the reference mode's Mitsuba medium ---------------------------------------------------
-    def mitsuba_medium(self, box_min: np.ndarray, box_max: np.ndarray) -> dict[str, Any]:
-        """A ``heterogeneous`` medium over a grid of the density at the centres of
-        :data:`GRID_SHAPE` cells over the haze box (world corners ``box_min``, ``box_max``,
-        m), trilinearly interpolated; its extinction 0 until a level sets it."""
-        import mitsuba as mi
+    def mitsuba_medium(self, box_min: np.ndarray, box_max: np.ndarray) -> Any:
+        """The field itself as a Mitsuba medium over the haze box (world corners ``box_min``,
+        ``box_max``, m): :class:`seahaze.render.field_medium.FieldMedium`, evaluated exactly
+        in the render kernel (no grid); its extinction 0 until a level sets it."""
+        from .render.field_medium import FieldMedium
 
-        box_min, box_max = np.asarray(box_min, np.float64), np.asarray(box_max, np.float64)
-        grid = self.density_grid_over(box_min, box_max, GRID_SHAPE)
-        self._grid_cache["rho"] = grid
-        volume = mi.VolumeGrid(_with_rgb(grid, np.zeros(3)))
-        return grid_medium_dict(volume, box_min, box_max, self.albedo, self.g)
+        return FieldMedium(self, box_min, box_max)
 
     def mitsuba_level(self, sigma_rgb: np.ndarray, albedo: float, g: float) -> dict[str, Any]:
         import mitsuba as mi
 
-        if "rho" not in self._grid_cache:
-            raise ValueError("the grid covers the haze box: call mitsuba_medium first")
-        data = _with_rgb(self._grid_cache["rho"], np.asarray(sigma_rgb, np.float64))
         return {
-            "sigma_t.data": mi.TensorXf(data),
-            "albedo.value.value": albedo,
+            "sigma_t": mi.Color3f(*(float(c) for c in sigma_rgb)),
+            "albedo": albedo,
             "phase_function.g": g,
         }
 
@@ -224,7 +212,8 @@ class NonUniformHaze(HazeMedium):
         self, box_min: np.ndarray, box_max: np.ndarray, shape: tuple[int, int, int]
     ) -> np.ndarray:
         """(z, y, x) float32: the density at the centres of ``shape`` cells over the box from
-        ``box_min`` to ``box_max`` (world corners, m)."""
+        ``box_min`` to ``box_max`` (world corners, m): what a grid volume of the field would
+        hold (``scripts/bench_nonuniform.py`` measures such grids' error)."""
         axes = [
             lo + (np.arange(n) + 0.5) / n * (hi - lo)
             for lo, hi, n in zip(box_min[::-1], box_max[::-1], shape, strict=True)
@@ -299,11 +288,6 @@ def _digest(*arrays: np.ndarray) -> str:
         h.update(np.ascontiguousarray(a).tobytes())
         h.update(str(a.shape).encode())
     return h.hexdigest()
-
-
-def _with_rgb(grid: np.ndarray, rgb: np.ndarray) -> np.ndarray:
-    """A density grid (z, y, x) times per-channel ``rgb``: Mitsuba's (z, y, x, 3) layout."""
-    return (grid[..., None] * rgb.astype(np.float32)).astype(np.float32)
 
 
 def fan_mean(medium: NonUniformHaze, view: HorizontalView) -> float:

@@ -212,8 +212,8 @@ def scene_core_seconds(spec: SceneSpec) -> tuple[float, float]:
         tables = photons * sum(_interpolated(PHYSICAL_TABLE_S, v) for v in levels)
         return serial, parallel + tables
     parallel = pixels * spp * CLEAN_CORE_S
-    # Delta tracking through a grid samples at the densest cell's rate: patches whose density
-    # spans R cost about sqrt(R) times as many steps (measured 1.13x this at R = 30).
+    # Delta tracking samples at the field's bound: patches whose density spans R cost about
+    # sqrt(R) times as many steps (the exact field's majorant; docs/limits.md).
     patches = spec.haze.patches
     majorant = math.sqrt(patches.density_ratio) if patches is not None else 1.0
     for v in levels:
@@ -229,9 +229,8 @@ def scene_core_seconds(spec: SceneSpec) -> tuple[float, float]:
 def varying_haze_seconds(spec: SceneSpec) -> float:
     """CPU seconds of the optical depths of haze that varies across the sea (``haze.patches``,
     ``haze.bank``): once per scene, three Gauss points per panel of its horizontal scale
-    over :data:`FIELD_RAY_M` per pixel (:mod:`seahaze.nonuniform`), plus the ``reference``
-    mode's density grid; 0 for haze that varies with height alone."""
-    from ..nonuniform import GRID_SHAPE
+    over :data:`FIELD_RAY_M` per pixel (:mod:`seahaze.nonuniform`); 0 for haze that varies
+    with height alone."""
     from ..scene_medium import haze_field
 
     field = haze_field(spec)
@@ -240,8 +239,6 @@ def varying_haze_seconds(spec: SceneSpec) -> float:
     horizontal, _ = field.scales_m()
     width, height = spec.camera.resolution
     points = width * height * 3.0 * FIELD_RAY_M / horizontal
-    if spec.render.mode == "reference":
-        points += math.prod(GRID_SHAPE)
     return points * FIELD_POINT_S
 
 

@@ -125,6 +125,16 @@ def sensor_dict(
     return sensor
 
 
+def _place_medium_object(scene: dict[str, Any], medium: Any) -> None:
+    """Put a medium given as an object (not a plugin dict) where ``scene`` refers to it:
+    Mitsuba's dict parser resolves a ``ref`` only to objects it built itself."""
+    holders = [(scene[key], "medium") for key in ("sensor", "sensor_airlight")]
+    holders.append((scene[HAZE_BOX_ID], "interior"))
+    for holder, prop in holders:
+        if holder.get(prop) == {"type": "ref", "id": HAZE_ID}:
+            holder[prop] = medium
+
+
 def _mesh(name: str, vertices: np.ndarray, faces: np.ndarray, bsdf: Any) -> Any:
     """A Mitsuba mesh built straight from numpy arrays (no files) with the loaded BSDF
     ``bsdf``. Its per-vertex and per-face values live in the BSDF's textures
@@ -357,10 +367,11 @@ def build_scene(
     half_width = haze_box_width(medium, camera, sigma_min, reach_m)
     inside = camera.height_m < top and haze_box
     integrator = {"type": "volpath", "max_depth": spec.render.max_depth, "rr_depth": 8}
+    haze_plugin = medium.mitsuba_medium(*_box_corners(camera, half_width, bottom, top))
     scene: dict[str, Any] = {
         "type": "scene",
         "integrator": integrator,
-        HAZE_ID: medium.mitsuba_medium(*_box_corners(camera, half_width, bottom, top)),
+        HAZE_ID: haze_plugin,
         "sensor": sensor_dict(
             camera,
             camera.width,
@@ -393,6 +404,8 @@ def build_scene(
     }
     if not haze_box:
         del scene[HAZE_BOX_ID], scene[HAZE_ID]
+    elif not isinstance(haze_plugin, dict):
+        _place_medium_object(scene, haze_plugin)
     # The vessels as the same fixed set of meshes in every scene (render/fleet.py): one
     # compiled kernel serves every scene of a batch. Their BSDFs, kept from scene to scene,
     # are loaded before the sea's, so that they hold the lowest registry ids in every process
@@ -413,6 +426,8 @@ def build_scene(
         clean = {"type": "scene", "integrator": integrator, "sensor": sensor}
         clean_scene = mi.load_dict({**clean, **lights, **surfaces})
     loaded = mi.load_dict(scene)
+    if haze_box and not isinstance(haze_plugin, dict):
+        haze_plugin.set_id(HAZE_ID)  # the parser named it after the last property it filled
     params = mi.traverse(loaded)
     shape_ids: dict[int, int] = {}
     vessel_faces: dict[int, np.ndarray] = {}

@@ -1,0 +1,214 @@
+"""The ``reference`` mode's medium for haze that varies across the sea: the field, exactly.
+
+A Mitsuba medium written in Python, as Mitsuba's own Python plugins are: a subclass of
+``mi.Medium`` whose extinction at a point ``x`` of level ``k`` is
+
+    σ_t(x) = σ_k · c · ρ_v(z) · m(x, y, z)
+
+— the density of :class:`seahaze.nonuniform.NonUniformHaze` (the vertical profile ``ρ_v``, the
+drifting patches and bank ``m`` of :mod:`seahaze.haze_field`, the normalisation ``c``),
+evaluated in the render kernel from the same formulas, the same lattice hash and the same
+seeds. Mitsuba's ``volpath`` samples it by delta tracking against a majorant (Woodcock et al.
+1965, "Techniques used in the GEM code for Monte Carlo neutronics calculations"; Mitsuba's
+heterogeneous media do the same), which is unbiased for any density below the majorant: the
+reference then has no resolution limit and no discretisation error — only Monte Carlo noise.
+The grid volume it replaces resolved patches no finer than its cells (docs/benchmarks.md).
+
+The majorant is the field's own bound, not a sampled maximum: fractal value noise lies in
+``[−1, 1]``, so patches reach at most ``√R`` (``R`` the density ratio); a bank at most
+``max(1, r)``; the vertical profile its largest value over its height. A loose majorant only
+costs null collisions (about ``majorant / σ_t`` per real one), never accuracy.
+
+Float32 against the float64 truth: positions and lattice coordinates are float32 in the
+kernel (2 mm at 20 km; a lattice coordinate of a few hundred to 1e-5), the hash is the same
+64-bit integer arithmetic; ``tests/test_field_medium.py`` holds the kernel's density to the
+numpy one's within 1e-4.
+
+Import this module only once a Mitsuba variant is set.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ..haze_field import (
+    LATTICE_MULTIPLIERS,
+    OCTAVE_SEED_STEP,
+    OCTAVES,
+    SPLITMIX_FINALISER,
+    Bank,
+    HazeField,
+    Patches,
+)
+from ..medium import NUMPY, HazeMedium, drjit_ops
+
+MAJORANT_MARGIN = 1.01
+"""The majorant's headroom over the field's bound: float32 rounding must never put the
+extinction above it (delta tracking would then be biased)."""
+PROFILE_SAMPLES = 16385
+"""Heights at which the vertical profile's largest value is found (its bound)."""
+
+
+# -- the field in drjit ----------------------------------------------------------------------
+def lattice_value(ix: Any, iy: Any, iz: Any, seed: int) -> Any:
+    """:func:`seahaze.haze_field.lattice_value` in the kernel: the same 64-bit hash of the
+    lattice point (``mi.Int64``) and seed, a value in ``[−1, 1]`` (float32)."""
+    mx, my, mz = LATTICE_MULTIPLIERS
+    (shift1, mul1), (shift2, mul2), shift3 = SPLITMIX_FINALISER
+    h = mi.UInt64(ix) * mx
+    h ^= mi.UInt64(iy) * my
+    h ^= mi.UInt64(iz) * mz
+    h ^= seed & 0xFFFFFFFFFFFFFFFF
+    h ^= h >> shift1
+    h *= mul1
+    h ^= h >> shift2
+    h *= mul2
+    h ^= h >> shift3
+    return mi.Float(mi.Float64(h >> 11) * (2.0 / 2.0**53) - 1.0)
+
+
+def value_noise(q: tuple[Any, Any, Any], seed: int) -> Any:
+    """:func:`seahaze.haze_field.value_noise` in the kernel: the lattice values at the eight
+    corners of ``q``'s cell blended with the quintic fade."""
+    base = [dr.floor(c) for c in q]
+    fade = [_fade(c - b) for c, b in zip(q, base, strict=True)]
+    cells = [mi.Int64(b) for b in base]
+    out = mi.Float(0.0)
+    for corner in range(8):
+        offsets = [(corner >> axis) & 1 for axis in range(3)]
+        weight = mi.Float(1.0)
+        for f, o in zip(fade, offsets, strict=True):
+            weight = weight * (f if o else 1.0 - f)
+        ix, iy, iz = (c + o for c, o in zip(cells, offsets, strict=True))
+        out = dr.fma(weight, lattice_value(ix, iy, iz, seed), out)
+    return out
+
+
+def fractal_noise(q: tuple[Any, Any, Any], seed: int) -> Any:
+    """:func:`seahaze.haze_field.fractal_noise` in the kernel, in ``[−1, 1]``."""
+    total, weight_sum = mi.Float(0.0), 0.0
+    for octave in range(OCTAVES):
+        scale, weight = 2.0**octave, 0.5**octave
+        scaled = tuple(c * scale for c in q)
+        total += weight * value_noise(scaled, seed + OCTAVE_SEED_STEP * octave)
+        weight_sum += weight
+    return total * (1.0 / weight_sum)
+
+
+def patches_modulation(patches: Patches, x: Any, y: Any, z: Any, along: tuple[float, float]):
+    """:meth:`seahaze.haze_field.Patches.modulation` in the kernel."""
+    ux, uy = along
+    u = x * ux + y * uy
+    v = y * ux - x * uy
+    q = (
+        u * (1.0 / patches.correlation_m),
+        v * (patches.anisotropy / patches.correlation_m),
+        z * (1.0 / patches.vertical_m),
+    )
+    amplitude = 0.5 * math.log(patches.density_ratio)
+    return dr.exp(amplitude * fractal_noise(q, patches.seed))
+
+
+def bank_modulation(bank: Bank, x: Any, y: Any) -> Any:
+    """:meth:`seahaze.haze_field.Bank.modulation` in the kernel."""
+    az = math.radians(bank.toward_deg)
+    s = (x - bank.origin_xy[0]) * math.cos(az) + (y - bank.origin_xy[1]) * math.sin(az)
+    step = 0.5 * (1.0 + dr.tanh((s - bank.distance_m) * (0.5 / bank.edge_m)))
+    return bank.near_ratio + (1.0 - bank.near_ratio) * step
+
+
+def field_modulation(field: HazeField, p: Any, travelled: Any) -> Any:
+    """``m`` at world points ``p`` (``mi.Point3f``) with the field moved ``travelled`` metres
+    along its drift (a kernel parameter: every frame of a sequence shares the kernel)."""
+    ux, uy = field.drift.unit
+    x, y = p.x - ux * travelled, p.y - uy * travelled
+    m = mi.Float(1.0)
+    if field.patches is not None:
+        m *= patches_modulation(field.patches, x, y, p.z, field.drift.unit)
+    if field.bank is not None:
+        m *= bank_modulation(field.bank, x, y)
+    return m
+
+
+def field_bound(field: HazeField) -> float:
+    """The largest ``m`` can be: ``√R`` for patches (the noise is in ``[−1, 1]``),
+    ``max(1, r)`` for a bank."""
+    bound = 1.0
+    if field.patches is not None:
+        bound *= math.sqrt(field.patches.density_ratio)
+    if field.bank is not None:
+        bound *= max(1.0, field.bank.near_ratio)
+    return bound
+
+
+def profile_bound(profile: HazeMedium) -> float:
+    """The vertical profile's largest density, over :data:`PROFILE_SAMPLES` heights."""
+    z = np.linspace(profile.bottom, profile.top, PROFILE_SAMPLES)
+    return float(np.max(profile.density(z, NUMPY)))
+
+
+# -- the Mitsuba medium ----------------------------------------------------------------------
+class FieldMedium(mi.Medium):
+    """The haze ``medium`` (a :class:`seahaze.nonuniform.NonUniformHaze`) over the box from
+    ``box_min`` to ``box_max`` (world corners, m), its extinction 0 until a level sets it
+    through the scene parameters ``sigma_t`` (1/m, R, G, B: the level's, before the
+    normalisation), ``albedo`` and ``phase_function.g``."""
+
+    def __init__(self, medium: Any, box_min: np.ndarray, box_max: np.ndarray):
+        super().__init__(mi.Properties())
+        self.m_is_homogeneous = False
+        self.m_has_spectral_extinction = True
+        self.haze = medium
+        self.box = mi.ScalarBoundingBox3f([float(c) for c in box_min], [float(c) for c in box_max])
+        self.peak = (
+            medium.scale
+            * profile_bound(medium.profile)
+            * field_bound(medium.field)
+            * MAJORANT_MARGIN
+        )
+        # Kernel parameters, not literals: every level, and every frame, reuses the kernel.
+        self.sigma_t = dr.opaque(mi.Color3f, 0.0)
+        self.albedo = dr.opaque(mi.Float, medium.albedo)
+        drift = medium.field.drift
+        self.travelled = dr.opaque(mi.Float, drift.speed_m_s * drift.time_s)
+        self.phase = mi.load_dict({"type": "hg", "g": medium.g})
+
+    def density(self, p: Any) -> Any:
+        """The medium's relative density ``c ρ_v(z) m(x, y, z)`` at world points ``p``."""
+        vertical = self.haze.profile.density(p.z, drjit_ops())
+        return self.haze.scale * vertical * field_modulation(self.haze.field, p, self.travelled)
+
+    def phase_function(self) -> Any:
+        return self.phase
+
+    def get_majorant(self, mei: Any, active: Any = True) -> Any:
+        return mi.UnpolarizedSpectrum(self.sigma_t * self.peak)
+
+    def get_scattering_coefficients(self, mei: Any, active: Any = True) -> tuple[Any, Any, Any]:
+        sigma_t = mi.UnpolarizedSpectrum(self.sigma_t * self.density(mei.p))
+        majorant = mi.UnpolarizedSpectrum(self.sigma_t * self.peak)
+        return sigma_t * self.albedo, majorant - sigma_t, sigma_t
+
+    def intersect_aabb(self, ray: Any) -> tuple[Any, Any, Any]:
+        return mi.BoundingBox3f(self.box.min, self.box.max).ray_intersect(ray)
+
+    def traverse(self, callback: Any) -> None:
+        flags = mi.ParamFlags.NonDifferentiable
+        callback.put("sigma_t", self.sigma_t, flags)
+        callback.put("albedo", self.albedo, flags)
+        callback.put("phase_function", self.phase, flags)
+
+    def parameters_changed(self, keys: Any = None) -> None:
+        dr.make_opaque(self.sigma_t, self.albedo)
+
+    def to_string(self) -> str:
+        return f"FieldMedium[peak={self.peak:.4g}, box={self.box}]"
+
+
+def _fade(t: Any) -> Any:
+    return t * t * t * (t * (t * 6.0 - 15.0) + 10.0)
