@@ -178,12 +178,15 @@ def open_session(
     reach_m: float = 0.0,
     timings: dict[str, float] | None = None,
     frame: int | None = None,
+    medium: HazeMedium | None = None,
 ) -> SceneSession:
     """Select the variant, build the geometry (unless given), load the Mitsuba scene for the
     spec's levels and mode, and trace the geometry pass.
 
     ``black_vessels`` and ``reach_m`` are for calibration scenes (:func:`build_scene`);
-    ``frame`` is the frame of ``spec.sequence`` whose geometry is built.
+    ``frame`` is the frame of ``spec.sequence`` whose geometry is built; ``medium`` the haze,
+    default the one the spec describes at that frame (a calibration scene renders its base
+    scene's field: :mod:`seahaze.verify.field`).
     """
     timings = {} if timings is None else timings
     variant = select_variant(spec.render.variant)
@@ -200,7 +203,7 @@ def open_session(
             black_vessels=black_vessels,
             haze_box=spec.render.mode != "physical",
             reach_m=reach_m,
-            medium=scene_haze_medium(spec, camera, frame),
+            medium=medium or scene_haze_medium(spec, camera, frame),
         )
     with _timed(timings, "aov"):
         pixels = passes.render_geometry(loaded)

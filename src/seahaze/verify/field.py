@@ -24,15 +24,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..camera import Camera
-from ..medium import HazeMedium
 from ..nonuniform import NonUniformHaze
-from ..render import passes
-from ..render.engine import SceneSession
-from ..render.scene import build_scene
-from ..render.variant import select_variant
 from ..scene_medium import scene_haze_medium
 from ..spec import RENDER_MODES, SceneSpec
-from ..world import SceneGeometry
 from .fit import RayLengths
 from .targets import Target, VerifyInputError, sky_pixels, target_pixels
 
@@ -65,28 +59,6 @@ def calibration_medium(base: SceneSpec) -> NonUniformHaze | None:
     (the calibration scene's own medium is then the same: it varies with height alone)."""
     medium = scene_haze_medium(base, Camera.from_spec(base.camera))
     return medium if isinstance(medium, NonUniformHaze) else None
-
-
-def open_field_session(
-    spec: SceneSpec, geometry: SceneGeometry, medium: HazeMedium, reach_m: float
-) -> SceneSession:
-    """The calibration scene loaded with ``medium`` (the base scene's) and its geometry pass:
-    :func:`seahaze.render.engine.open_session` builds the medium from the spec it is given,
-    whose 24° camera would renormalise the field (module docstring)."""
-    variant = select_variant(spec.render.variant)
-    camera = Camera.from_spec(spec.camera)
-    loaded = build_scene(
-        spec,
-        camera,
-        geometry,
-        list(spec.haze.levels),
-        black_vessels=True,
-        haze_box=spec.render.mode != "physical",
-        reach_m=reach_m,
-        medium=medium,
-    )
-    pixels = passes.render_geometry(loaded)
-    return SceneSession(spec, variant, camera, geometry, loaded, pixels)
 
 
 def target_ray_lengths(

@@ -31,7 +31,6 @@ from .field import (
     calibration_medium,
     check_mode,
     coverage,
-    open_field_session,
     optical_depth_ratio,
     target_ray_lengths,
 )
@@ -222,10 +221,9 @@ def render_level_batches(
     # The haze box reaches past the farthest target, so the light around it is an unbounded
     # layer's (the physical mode needs no box).
     level_spec = with_overrides(spec, levels=[visibility_m])
-    if medium is None:
-        session = open_session(level_spec, geometry, black_vessels=True, reach_m=farthest)
-    else:
-        session = open_field_session(level_spec, geometry, medium, farthest)
+    session = open_session(
+        level_spec, geometry, black_vessels=True, reach_m=farthest, medium=medium
+    )
     distances = _check_target_pixels(session.pixels, targets)
     # Exact per-pixel reduced lengths (NonUniformHaze.ray_path_length across the sea).
     per_pixel = session.pixels.haze_path_length(session.loaded.medium)
