@@ -12,6 +12,10 @@ without haze. It prints, per region (sea, sky, all vessels, and each of the
 first three vessels), the relative difference of the region means, physical against volpath,
 ± the volpath mean's standard error (from its batches).
 
+``--fog-layer TOP,EDGE,ABOVE`` gives the haze a fog layer (``haze.fog_layer``: top and edge
+in metres, the density above as a share of the fog's) and ``--height`` the camera's height,
+in or above it.
+
 ``--vessel-light SHARE`` sets the share of the samples of the pass for the haze in front of
 vessels (the renderer's own by default; 0 leaves it out; docs/physics.md, "Haze in front of
 a vessel"). With ``--pitch`` and ``--fov`` the
@@ -21,6 +25,7 @@ samples), and ``--bands N`` splits sky and sea into N row bands.
 Usage: python scripts/compare_components.py V [--batches 8] [--g 0.75] [--sun 1] [--sky 1]
        [--sky-model clear|broken|overcast] [--cloud-seed N] [--sun-elevation DEG]
        [--heading DEG] [--pitch DEG] [--fov DEG] [--bands N] [--vessel-light SHARE]
+       [--fog-layer TOP,EDGE,ABOVE] [--height M]
 """
 
 from __future__ import annotations
@@ -76,6 +81,12 @@ def main() -> None:
     parser.add_argument(
         "--heading", type=float, default=None, help="camera.heading_deg (default: the scene's)"
     )
+    parser.add_argument("--height", type=float, default=None, help="camera.height_m")
+    parser.add_argument(
+        "--fog-layer",
+        default=None,
+        help="haze.fog_layer as TOP,EDGE,ABOVE (m, m, ratio), e.g. 25,3,0.25",
+    )
     parser.add_argument("--pitch", type=float, default=None, help="camera.pitch_deg")
     parser.add_argument("--fov", type=float, default=None, help="camera.fov_deg")
     parser.add_argument(
@@ -107,9 +118,14 @@ def main() -> None:
         changes["sun"]["elevation_deg"] = args.sun_elevation
     if args.g is not None:
         changes["haze"] = {"g": args.g}
+    if args.fog_layer is not None:
+        top, edge, above = (float(x) for x in args.fog_layer.split(","))
+        fog = {"top_m": top, "edge_m": edge, "above_ratio": above}
+        changes.setdefault("haze", {})["fog_layer"] = fog
     camera = {
         key: value
         for key, value in (
+            ("height_m", args.height),
             ("heading_deg", args.heading),
             ("pitch_deg", args.pitch),
             ("fov_deg", args.fov),
@@ -147,9 +163,12 @@ def main() -> None:
         in_band = np.isin(rows, band)
         for name in ("sky", "sea"):
             regions[f"{name} r{band[0]}-{band[-1]}"] = regions[name] & in_band
+    fog = haze.fog_layer
+    layer = "" if fog is None else f", fog layer to {fog.top_m:g} m (×{fog.above_ratio:g} above)"
     print(
         f"V = {v:g} m, g = {haze.g}, sun × {args.sun}, sky × {args.sky} ({base.sky.model}, "
-        f"sun at {base.sun.elevation_deg:g}°); {time.perf_counter() - start:.0f} s"
+        f"sun at {base.sun.elevation_deg:g}°), camera at {base.camera.height_m:g} m{layer}; "
+        f"{time.perf_counter() - start:.0f} s"
     )
     for name, m in regions.items():
         if not m.any():
