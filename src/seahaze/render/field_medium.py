@@ -160,7 +160,12 @@ class FieldMedium(mi.Medium):
     normalisation), ``albedo`` and ``phase_function.g``."""
 
     def __init__(self, medium: Any, box_min: np.ndarray, box_max: np.ndarray):
-        super().__init__(mi.Properties())
+        # The phase function goes in through the properties: Mitsuba's integrators read the
+        # base class's member, not a Python override of phase_function() (without it the
+        # medium scattered isotropically).
+        props = mi.Properties()
+        props["phase"] = mi.load_dict({"type": "hg", "g": medium.g})
+        super().__init__(props)
         self.m_is_homogeneous = False
         self.m_has_spectral_extinction = True
         self.haze = medium
@@ -176,15 +181,11 @@ class FieldMedium(mi.Medium):
         self.albedo = dr.opaque(mi.Float, medium.albedo)
         drift = medium.field.drift
         self.travelled = dr.opaque(mi.Float, drift.speed_m_s * drift.time_s)
-        self.phase = mi.load_dict({"type": "hg", "g": medium.g})
 
     def density(self, p: Any) -> Any:
         """The medium's relative density ``c ρ_v(z) m(x, y, z)`` at world points ``p``."""
         vertical = self.haze.profile.density(p.z, drjit_ops())
         return self.haze.scale * vertical * field_modulation(self.haze.field, p, self.travelled)
-
-    def phase_function(self) -> Any:
-        return self.phase
 
     def get_majorant(self, mei: Any, active: Any = True) -> Any:
         return mi.UnpolarizedSpectrum(self.sigma_t * self.peak)
@@ -201,7 +202,7 @@ class FieldMedium(mi.Medium):
         flags = mi.ParamFlags.NonDifferentiable
         callback.put("sigma_t", self.sigma_t, flags)
         callback.put("albedo", self.albedo, flags)
-        callback.put("phase_function", self.phase, flags)
+        callback.put("phase_function", self.phase_function(), flags)
 
     def parameters_changed(self, keys: Any = None) -> None:
         dr.make_opaque(self.sigma_t, self.albedo)
