@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from seahaze.vessels.cargo_hull import DECK_HEIGHT_M, boot_top, foremast, merchant_hull
 from seahaze.vessels.geometry import HullForm, box, boxes
 from seahaze.vessels.materials import (
     ANTIFOULING_REDS,
@@ -63,7 +64,6 @@ CONTAINER_GAP_M = (0.06, 0.02, 0.076)
 """Gaps between neighbouring boxes: across rows (m), between tiers (the corner castings'
 clearance, so no two boxes share a vertex), and between the two 20 ft boxes of a 40 ft slot
 (ISO 668's 3 in)."""
-DECK_HEIGHT_M = 2.8
 LIFEBOAT_ORANGE = material_from_srgb8("lifeboat_orange", (235, 100, 20), 0.5)
 
 
@@ -77,58 +77,6 @@ def _sight_line_limit(
         return eye_z * (sea_x - x) / (sea_x - eye_x)
 
     return limit
-
-
-def _merchant_hull(d: PrincipalDims, rng: np.random.Generator, *, fullness: float) -> HullForm:
-    """Cargo-ship hull: parallel middle body, raked stem, forecastle, transom counter stern.
-
-    ``fullness`` in [0, 1] goes from a fine container-ship entrance to a bluff bulker bow.
-    """
-    return HullForm(
-        length=d.length,
-        beam=d.beam,
-        draft=d.draft,
-        freeboard=d.freeboard,
-        sheer_fwd=u(rng, 0.04, 0.1) * d.depth,
-        sheer_aft=u(rng, 0.0, 0.03) * d.depth,
-        forecastle_height=u(rng, 2.3, 3.0),
-        forecastle_length=u(rng, 0.06, 0.09) * d.length,
-        parallel_fwd=u(rng, 0.1, 0.25) + 0.2 * fullness,
-        parallel_aft=u(rng, 0.15, 0.3) + 0.1 * fullness,
-        # Deck planform: blunt, so a flared bow still carries containers / a forecastle;
-        # the waterline stays fine through bow_flare.
-        entrance_exponent=u(rng, 2.3, 2.9) + 0.8 * fullness,
-        bow_roundness=1.0 + 0.4 * fullness,
-        transom_width=u(rng, 0.7, 0.88),
-        stem_rake=u(rng, 0.018, 0.035),
-        stem_exponent=0.5,
-        stern_cutup=u(rng, 0.08, 0.12),
-        transom_immersion=u(rng, -0.15, 0.15),
-        section_exponent=7.0,
-        bow_flare=u(rng, 0.35, 0.5) - 0.15 * fullness,
-    )
-
-
-def _boot_top(d: PrincipalDims) -> float:
-    """Antifouling top (m above the current waterline): the design load line at ~72 % depth.
-
-    A ship in ballast floats high and shows its red bottom; a laden one shows a thin band.
-    """
-    return max(0.3, 0.72 * d.depth - d.draft + 0.3)
-
-
-def _foremast(parts: PartSet, form: HullForm, paint: Material, rng: np.random.Generator) -> None:
-    x = form.half_length - u(rng, 0.025, 0.04) * form.length
-    z0 = float(form.deck_z(np.array([x]))[0])
-    parts.add_mast(
-        x,
-        0.0,
-        z0,
-        u(rng, 0.03, 0.05) * form.length,
-        max(0.25, 0.0015 * form.length),
-        paint,
-        yard_half_width=0.6,
-    )
 
 
 def _aft_house(
@@ -191,7 +139,7 @@ def build_container_ship(d: PrincipalDims, rng: np.random.Generator) -> list[Ves
     Bridge aft (feeder to Panamax) or, for ships over 280 m, often forward at ~1/3 L from the
     bow with the funnel aft (typical of ULCVs since ~2010).
     """
-    form = _merchant_hull(d, rng, fullness=0.0)
+    form = merchant_hull(d, rng, fullness=0.0)
     hull = pick_material(HULL_PAINTS_CARGO, rng)
     white = pick_material(SUPERSTRUCTURE_WHITES, rng)
     funnel = pick_material(FUNNEL_PAINTS, rng)
@@ -201,7 +149,7 @@ def build_container_ship(d: PrincipalDims, rng: np.random.Generator) -> list[Ves
         form,
         hull,
         bottom=pick_material(ANTIFOULING_REDS, rng),
-        boot_top_z=_boot_top(d),
+        boot_top_z=boot_top(d),
         deck=pick_material(DECK_PAINTS, rng),
     )
 
@@ -279,7 +227,7 @@ def build_container_ship(d: PrincipalDims, rng: np.random.Generator) -> list[Ves
     eye_z = z_top - 1.0 + 1.7
     sight = _sight_line_limit(x_fwd, eye_z, form.half_length, length)
     _add_container_stacks(parts, form, rng, coaming, max_tiers, keep_out, sight)
-    _foremast(parts, form, white, rng)
+    foremast(parts, form, white, rng)
     return parts.to_parts()
 
 
@@ -409,13 +357,13 @@ def _cargo_hull_with_aft_house(
     (hull, superstructure, deck) paints; one house deck per ``metres_per_deck`` of length
     on top of three, 4 to 8 decks in all.
     """
-    form = _merchant_hull(d, rng, fullness=fullness)
+    form = merchant_hull(d, rng, fullness=fullness)
     hull = pick_material(HULL_PAINTS_CARGO, rng)
     white = pick_material(SUPERSTRUCTURE_WHITES, rng)
     deck = pick_material(DECK_PAINTS, rng)
     parts = PartSet()
     parts.add_hull(
-        form, hull, bottom=pick_material(ANTIFOULING_REDS, rng), boot_top_z=_boot_top(d), deck=deck
+        form, hull, bottom=pick_material(ANTIFOULING_REDS, rng), boot_top_z=boot_top(d), deck=deck
     )
     n_decks = int(np.clip(round(3 + d.length / metres_per_deck + rng.integers(0, 2)), 4, 8))
     _, x_house_fwd, _ = _aft_house(
@@ -477,7 +425,7 @@ def build_bulk_carrier(d: PrincipalDims, rng: np.random.Generator) -> list[Vesse
             xc = 0.5 * (centres[i] + centres[i + 1])
             z0, _ = deck_range(form, xc - 1, xc + 1)
             parts.add_crane(xc, 0.0, z0, ped_h, ped_r, jib, elevation, direction, crane_paint)
-    _foremast(parts, form, white, rng)
+    foremast(parts, form, white, rng)
     return parts.to_parts()
 
 
@@ -510,7 +458,7 @@ def build_tanker(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]
             side,
             crane_paint,
         )
-    _foremast(parts, form, white, rng)
+    foremast(parts, form, white, rng)
     return parts.to_parts()
 
 
