@@ -50,6 +50,7 @@ from bench_nonuniform import (
     scene_spec,
     session_rays,
     sigma_of,
+    whole_sky_pixels,
 )
 from bench_passes import replace_section
 
@@ -106,7 +107,7 @@ def transmittance_rows(name: str, haze: dict[str, Any], res: tuple[int, int], sp
     rays = rays_in_box(
         geo, (camera.x_m, camera.y_m), scene.meta["haze"]["box_half_width_m"], medium
     )
-    whole = _whole_sky_pixels(rays.sky.reshape(geo.distance_m.shape)).reshape(-1)[rays.sky]
+    whole = whole_sky_pixels(rays.sky.reshape(geo.distance_m.shape)).reshape(-1)[rays.sky]
     lengths = _subpixel_lengths(camera, rays, medium)
     elevation = geo.elevation_deg().reshape(-1)[rays.sky]
     clean = scene.clean[..., 1].reshape(-1)[rays.sky].astype(np.float64)
@@ -133,18 +134,6 @@ def transmittance_rows(name: str, haze: dict[str, Any], res: tuple[int, int], sp
                 }
             )
     return rows
-
-
-def _whole_sky_pixels(sky: np.ndarray) -> np.ndarray:
-    """Sky pixels whose eight neighbours are sky too: a pixel at a vessel's or the horizon's
-    edge has part of its area on a surface, and its level over clean is not a transmittance."""
-    h, w = sky.shape
-    padded = np.pad(sky, 1, constant_values=True)
-    inner = np.ones((h, w), bool)
-    for dy in range(3):
-        for dx in range(3):
-            inner &= padded[dy : dy + h, dx : dx + w]
-    return inner
 
 
 def _subpixel_lengths(camera: Any, rays: Rays, medium: Any) -> np.ndarray:

@@ -660,16 +660,8 @@ def transmittance_rows(
         grid, rays.box_min, rays.box_max, rays.origin, rays.directions[sky], t_end
     )
     over_area = subpixel_grid_lengths(grid, rays, camera, geo.directions.shape[:2])
-    # Only pixels whose eight neighbours are sky too: a pixel at a vessel's or the horizon's
-    # edge has part of its area on a surface, much nearer than the sky, and its I/J is not
-    # the sky's transmittance (by far the largest term in the lowest band, measured).
-    h, w = geo.distance_m.shape
-    padded = np.pad(rays.sky.reshape(h, w), 1, constant_values=True)
-    inner = np.ones((h, w), bool)
-    for dy in range(3):
-        for dx in range(3):
-            inner &= padded[dy : dy + h, dx : dx + w]
-    whole = inner.reshape(-1)[sky]
+    # (By far the largest term in the lowest band, measured: see whole_sky_pixels.)
+    whole = whole_sky_pixels(rays.sky.reshape(geo.distance_m.shape)).reshape(-1)[sky]
     elevation = geo.elevation_deg().reshape(-1)[sky]
     clean = scene.clean[..., 1].reshape(-1)[sky].astype(np.float64)
     rows = []
@@ -708,6 +700,19 @@ def transmittance_rows(
                 }
             )
     return rows
+
+
+def whole_sky_pixels(sky: np.ndarray) -> np.ndarray:
+    """Sky pixels (H, W) whose eight neighbours are sky too: a pixel at a vessel's or the
+    horizon's edge has part of its area on a surface, much nearer than the sky, and its level
+    over its clean value is not the sky's transmittance."""
+    h, w = sky.shape
+    padded = np.pad(sky, 1, constant_values=True)
+    inner = np.ones((h, w), bool)
+    for dy in range(3):
+        for dx in range(3):
+            inner &= padded[dy : dy + h, dx : dx + w]
+    return inner
 
 
 def subpixel_grid_lengths(
