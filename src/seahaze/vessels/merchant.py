@@ -1,4 +1,5 @@
-"""Large merchant ships: container ship, bulk carrier, tanker and passenger (ro-pax) ferry.
+"""Large merchant ships: container ship and passenger (ro-pax) ferry; the bulk carrier and
+tanker builders are :mod:`seahaze.vessels.bulk_tanker`'s, named here too.
 
 Every builder receives principal dimensions already sampled inside the class ranges (see
 :mod:`seahaze.vessels.library`) and samples the remaining proportions from ``rng`` inside
@@ -22,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from seahaze.vessels.accommodation import LIFEBOAT_ORANGE
+from seahaze.vessels.bulk_tanker import build_bulk_carrier, build_tanker
 from seahaze.vessels.cargo_hull import DECK_HEIGHT_M, boot_top, foremast, merchant_hull
 from seahaze.vessels.geometry import HullForm, box, boxes
 from seahaze.vessels.materials import (
@@ -30,11 +33,9 @@ from seahaze.vessels.materials import (
     DECK_PAINTS,
     FUNNEL_PAINTS,
     HULL_PAINTS_CARGO,
-    MACHINERY_PAINTS,
     SUPERSTRUCTURE_WHITES,
     WINDOW_GLASS,
     Material,
-    material_from_srgb8,
     pick_material,
 )
 from seahaze.vessels.model import VesselPart
@@ -64,7 +65,6 @@ CONTAINER_GAP_M = (0.06, 0.02, 0.076)
 """Gaps between neighbouring boxes: across rows (m), between tiers (the corner castings'
 clearance, so no two boxes share a vertex), and between the two 20 ft boxes of a 40 ft slot
 (ISO 668's 3 in)."""
-LIFEBOAT_ORANGE = material_from_srgb8("lifeboat_orange", (235, 100, 20), 0.5)
 
 
 def _sight_line_limit(
@@ -77,60 +77,6 @@ def _sight_line_limit(
         return eye_z * (sea_x - x) / (sea_x - eye_x)
 
     return limit
-
-
-def _aft_house(
-    parts: PartSet,
-    form: HullForm,
-    rng: np.random.Generator,
-    *,
-    n_decks: int,
-    paint: Material,
-    funnel: Material,
-    soot: Material,
-) -> tuple[float, float, float]:
-    """Aft accommodation + funnel of bulk carriers and tankers. Returns (x_aft, x_fwd, z_bridge
-    roof)."""
-    length, beam = form.length, form.beam
-    x_aft = -form.half_length + u(rng, 0.035, 0.06) * length
-    house_len = max(12.0, u(rng, 0.07, 0.1) * length)
-    x_fwd = x_aft + house_len
-    half_w = min(u(rng, 0.3, 0.4) * beam, min_half_beam(form, x_aft, x_fwd) - 0.5)
-    z_roof, z_top = parts.add_accommodation(
-        form,
-        x_aft,
-        x_fwd,
-        half_w,
-        n_decks,
-        DECK_HEIGHT_M,
-        wing_half_width=0.5 * beam,
-        wheelhouse_length=u(rng, 0.35, 0.5) * house_len,
-        paint=paint,
-        glass=WINDOW_GLASS[0],
-    )
-    f_half_len = u(rng, 0.12, 0.18) * house_len
-    parts.add_funnel(
-        x_aft + f_half_len + u(rng, 0.5, 2.0),
-        0.0,
-        f_half_len,
-        u(rng, 0.12, 0.2) * beam,
-        z_roof,
-        z_top + u(rng, 3.0, 7.0),
-        rake=u(rng, 0.5, 2.0),
-        paint=funnel,
-        top=soot,
-    )
-    parts.add_mast(
-        x_fwd - 0.3 * house_len,
-        0.0,
-        z_top,
-        u(rng, 4.0, 7.0),
-        0.3,
-        paint,
-        yard_half_width=2.0,
-        name="radar_mast",
-    )
-    return x_aft, x_fwd, z_top
 
 
 def build_container_ship(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
@@ -346,120 +292,6 @@ def _slot_boxes(bay: tuple[float, float], rng: np.random.Generator) -> list[tupl
     if rng.random() >= TWENTY_FOOT_SHARE:
         return [(x0, x1)]
     return [(x0, x0 + CONTAINER_20FT_LENGTH_M), (x1 - CONTAINER_20FT_LENGTH_M, x1)]
-
-
-def _cargo_hull_with_aft_house(
-    d: PrincipalDims, rng: np.random.Generator, fullness: float, metres_per_deck: float
-) -> tuple[PartSet, HullForm, float, tuple[Material, Material, Material]]:
-    """The shared start of bulk carriers and tankers: painted cargo hull and aft house.
-
-    Returns the parts so far, the hull form, the x of the house front and the
-    (hull, superstructure, deck) paints; one house deck per ``metres_per_deck`` of length
-    on top of three, 4 to 8 decks in all.
-    """
-    form = merchant_hull(d, rng, fullness=fullness)
-    hull = pick_material(HULL_PAINTS_CARGO, rng)
-    white = pick_material(SUPERSTRUCTURE_WHITES, rng)
-    deck = pick_material(DECK_PAINTS, rng)
-    parts = PartSet()
-    parts.add_hull(
-        form, hull, bottom=pick_material(ANTIFOULING_REDS, rng), boot_top_z=boot_top(d), deck=deck
-    )
-    n_decks = int(np.clip(round(3 + d.length / metres_per_deck + rng.integers(0, 2)), 4, 8))
-    _, x_house_fwd, _ = _aft_house(
-        parts,
-        form,
-        rng,
-        n_decks=n_decks,
-        paint=white,
-        funnel=pick_material(FUNNEL_PAINTS, rng),
-        soot=FUNNEL_PAINTS[0],
-    )
-    return parts, form, x_house_fwd, (hull, white, deck)
-
-
-def build_bulk_carrier(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
-    """Bulk carrier: bluff hull, aft accommodation + funnel, a row of raised hatch covers and,
-    on geared Handysize/Supramax ships, four deck cranes between the hatches."""
-    parts, form, x_house_fwd, (hull, white, deck) = _cargo_hull_with_aft_house(
-        d, rng, fullness=1.0, metres_per_deck=90.0
-    )
-
-    length, beam = d.length, d.beam
-    x_first = x_house_fwd + 0.025 * length
-    x_last = form.half_length - form.forecastle_length - 0.02 * length
-    n_holds = int(np.clip(round(length / 33.0), 4, 9))
-    pitch = (x_last - x_first) / n_holds
-    cover_len = u(rng, 0.65, 0.75) * pitch
-    cover_paint = hull if rng.random() < 0.5 else deck
-    cover_h = u(rng, 1.8, 2.6) + 0.006 * length  # coaming + cover: ~2.5 m small, ~4 m Capesize
-    centres = [x_first + (i + 0.5) * pitch for i in range(n_holds)]
-    for xc in centres:
-        x0, x1 = xc - 0.5 * cover_len, xc + 0.5 * cover_len
-        hw = min(u(rng, 0.25, 0.31) * beam, min_half_beam(form, x0, x1) - 1.0)
-        z0, z1 = deck_range(form, x0, x1)
-        parts.add_block(
-            "hatch_covers",
-            cover_paint,
-            x0,
-            x1,
-            hw,
-            z0 - EMBED_M,
-            z1 + cover_h,
-            top_inset=0.15 * hw,
-            front_rake=0.3,
-            aft_rake=0.3,
-        )
-
-    geared = length < 235.0 and rng.random() < 0.6
-    if geared:
-        crane_paint = pick_material(MACHINERY_PAINTS, rng)
-        ped_h, ped_r = u(rng, 8.0, 11.0), u(rng, 1.3, 1.8)
-        # Jibs all point the same way and are shorter than the crane spacing so they never
-        # cross (stowed on their rests, or slewed fore-aft while working).
-        jib = float(np.clip(u(rng, 0.1, 0.13) * length, 15.0, 32.0))
-        jib = min(jib, 0.85 * pitch)
-        direction = 1.0 if rng.random() < 0.5 else -1.0
-        elevation = u(rng, 10.0, 35.0)
-        for i in range(min(4, n_holds - 1)):
-            xc = 0.5 * (centres[i] + centres[i + 1])
-            z0, _ = deck_range(form, xc - 1, xc + 1)
-            parts.add_crane(xc, 0.0, z0, ped_h, ped_r, jib, elevation, direction, crane_paint)
-    foremast(parts, form, white, rng)
-    return parts.to_parts()
-
-
-def build_tanker(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
-    """Oil/product tanker: long low flush deck, aft house + funnel, centreline pipe rack and
-    catwalk, manifold cranes amidships."""
-    parts, form, x_house_fwd, (_hull, white, deck) = _cargo_hull_with_aft_house(
-        d, rng, fullness=0.7, metres_per_deck=80.0
-    )
-    length, beam = d.length, d.beam
-    x0 = x_house_fwd + 1.0
-    x1 = form.half_length - form.forecastle_length - 1.0
-    z0, z1 = deck_range(form, x0, x1)
-    rack_hw = max(1.0, u(rng, 0.04, 0.06) * beam)
-    parts.add_block("pipe_rack", deck, x0, x1, rack_hw, z0 - EMBED_M, z1 + u(rng, 1.2, 2.0))
-    catwalk_z = z1 + u(rng, 2.4, 3.0)
-    parts.add("pipe_rack", box(x0, x1, -0.6, 0.6, catwalk_z - 0.3, catwalk_z), deck)
-    crane_paint = pick_material(MACHINERY_PAINTS, rng)
-    xc = u(rng, -0.05, 0.05) * length
-    zc, _ = deck_range(form, xc - 1, xc + 1)
-    for side in (-1.0, 1.0):
-        parts.add_crane(
-            xc,
-            side * 0.3 * beam,
-            zc,
-            u(rng, 6.0, 8.0),
-            0.9,
-            u(rng, 12.0, 18.0),
-            u(rng, 15, 35),
-            side,
-            crane_paint,
-        )
-    foremast(parts, form, white, rng)
-    return parts.to_parts()
 
 
 def build_passenger_ferry(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:

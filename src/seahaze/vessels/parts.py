@@ -23,7 +23,16 @@ from seahaze.vessels.geometry import (
 from seahaze.vessels.materials import Material
 from seahaze.vessels.model import VesselPart
 
-__all__ = ["EMBED_M", "PartSet", "PrincipalDims", "deck_range", "min_half_beam", "u"]
+__all__ = [
+    "EMBED_M",
+    "PartSet",
+    "PrincipalDims",
+    "deck_at",
+    "deck_range",
+    "detail_rng",
+    "min_half_beam",
+    "u",
+]
 
 # Sinking superstructure bodies slightly into the body below hides the seam at any view angle.
 EMBED_M = 0.15
@@ -52,6 +61,16 @@ class PrincipalDims:
 def u(rng: np.random.Generator, lo: float, hi: float) -> float:
     """One uniform draw as a plain float (keeps the builders terse and deterministic)."""
     return float(rng.uniform(lo, hi))
+
+
+def detail_rng(d: PrincipalDims) -> np.random.Generator:
+    """A generator for a builder's added details, seeded by the vessel's principal dimensions
+    (themselves drawn from the caller's ``rng``): deterministic for a seed, and drawing nothing
+    from the caller's ``rng``, so the vessels built after this one in a scene draw what they
+    drew before the details existed (seeded as the tug's and fishing boat's details are in
+    :mod:`seahaze.vessels.smallcraft`)."""
+    dims = np.array([d.length, d.beam, d.depth, d.draft], np.float64)
+    return np.random.default_rng(np.frombuffer(dims.tobytes(), np.uint32))
 
 
 def deck_range(form: HullForm, x0: float, x1: float) -> tuple[float, float]:
