@@ -192,8 +192,7 @@ class FieldMedium(mi.Medium):
 
     def get_scattering_coefficients(self, mei: Any, active: Any = True) -> tuple[Any, Any, Any]:
         sigma_t = mi.UnpolarizedSpectrum(self.sigma_t * self.density(mei.p))
-        majorant = mi.UnpolarizedSpectrum(self.sigma_t * self.peak)
-        return sigma_t * self.albedo, majorant - sigma_t, sigma_t
+        return sigma_t * self.albedo, self.get_majorant(mei, active) - sigma_t, sigma_t
 
     def intersect_aabb(self, ray: Any) -> tuple[Any, Any, Any]:
         return mi.BoundingBox3f(self.box.min, self.box.max).ray_intersect(ray)
