@@ -14,7 +14,14 @@ first three vessels), the relative difference of the region means, physical agai
 
 ``--fog-layer TOP,EDGE,ABOVE`` gives the haze a fog layer (``haze.fog_layer``: top and edge
 in metres, the density above as a share of the fog's) and ``--height`` the camera's height,
-in or above it.
+in or above it. ``--patches CORRELATION,ANISOTROPY,VERTICAL,RATIO`` (m, ratio, m, max/min)
+and ``--bank DISTANCE,BEARING,EDGE,NEAR`` (m, deg, m, ratio) make it vary across the sea
+(``haze.patches``, ``haze.bank``); sea, sky and vessels are then also compared apart where
+each pixel's ray holds more haze than the level's mean (``dense``: a density ratio above
+1.5, :mod:`seahaze.render.pixel_density`) and less (``thin``: below 1/1.5).
+
+``--cache DIR`` keeps the volpath means there, keyed by the scene, the level and the batch
+count, so that a change to ``physical`` is compared again without tracing them again.
 
 ``--vessel-light SHARE`` sets the share of the samples of the pass for the haze in front of
 vessels (the renderer's own by default; 0 leaves it out; docs/physics.md, "Haze in front of
@@ -25,13 +32,15 @@ samples), and ``--bands N`` splits sky and sea into N row bands.
 Usage: python scripts/compare_components.py V [--batches 8] [--g 0.75] [--sun 1] [--sky 1]
        [--sky-model clear|broken|overcast] [--cloud-seed N] [--sun-elevation DEG]
        [--heading DEG] [--pitch DEG] [--fov DEG] [--bands N] [--vessel-light SHARE]
-       [--fog-layer TOP,EDGE,ABOVE] [--height M]
+       [--fog-layer TOP,EDGE,ABOVE] [--height M] [--patches C,A,V,R] [--bank D,B,E,N]
+       [--cache DIR]
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import hashlib
 import sys
 import time
 from pathlib import Path
@@ -64,6 +73,20 @@ def volpath_luminance(session, sigma, albedo: float, g: float, batches: int, off
     return np.mean(runs, 0), np.std(runs, 0, ddof=1) / np.sqrt(batches)
 
 
+def cached(cache: Path | None, key: str, compute):
+    """``compute()`` (a tuple of arrays), kept in ``cache`` under a digest of ``key``."""
+    if cache is None:
+        return compute()
+    path = cache / f"{hashlib.blake2b(key.encode(), digest_size=12).hexdigest()}.npz"
+    if path.exists():
+        with np.load(path) as stored:
+            return tuple(stored[f"a{i}"] for i in range(len(stored.files)))
+    result = compute()
+    cache.mkdir(parents=True, exist_ok=True)
+    np.savez(path, **{f"a{i}": a for i, a in enumerate(result)})
+    return result
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("visibility", type=float, help="V in metres")
@@ -87,6 +110,14 @@ def main() -> None:
         default=None,
         help="haze.fog_layer as TOP,EDGE,ABOVE (m, m, ratio), e.g. 25,3,0.25",
     )
+    parser.add_argument(
+        "--patches",
+        default=None,
+        help="haze.patches as CORRELATION,ANISOTROPY,VERTICAL,RATIO, e.g. 400,3,60,30",
+    )
+    parser.add_argument(
+        "--bank", default=None, help="haze.bank as DISTANCE,BEARING,EDGE,NEAR, e.g. 900,0,80,0.2"
+    )
     parser.add_argument("--pitch", type=float, default=None, help="camera.pitch_deg")
     parser.add_argument("--fov", type=float, default=None, help="camera.fov_deg")
     parser.add_argument(
@@ -98,6 +129,7 @@ def main() -> None:
         default=None,
         help="the vessel-light pass's share of the samples (0: off; default: the renderer's)",
     )
+    parser.add_argument("--cache", type=Path, default=None, help="keep volpath means here")
     args = parser.parse_args()
 
     from seahaze.imaging import luminance
@@ -122,6 +154,14 @@ def main() -> None:
         top, edge, above = (float(x) for x in args.fog_layer.split(","))
         fog = {"top_m": top, "edge_m": edge, "above_ratio": above}
         changes.setdefault("haze", {})["fog_layer"] = fog
+    if args.patches is not None:
+        corr, aniso, vertical, ratio = (float(x) for x in args.patches.split(","))
+        patches = {"correlation_m": corr, "anisotropy": aniso, "vertical_m": vertical}
+        changes.setdefault("haze", {})["patches"] = patches | {"density_ratio": ratio}
+    if args.bank is not None:
+        distance, bearing, edge, near = (float(x) for x in args.bank.split(","))
+        bank = {"distance_m": distance, "bearing_deg": bearing, "edge_m": edge}
+        changes.setdefault("haze", {})["bank"] = bank | {"near_ratio": near}
     camera = {
         key: value
         for key, value in (
@@ -141,8 +181,17 @@ def main() -> None:
     start = time.perf_counter()
     levels = sorted({*LEVELS, v})
     reference = open_session(with_overrides(base, mode="reference", levels=levels))
-    ref, ref_se = volpath_luminance(reference, sigma, haze.albedo, haze.g, args.batches, 200000)
-    clean_ref, _ = volpath_luminance(reference, 0.0, haze.albedo, haze.g, 4, 300000)
+    key = f"{reference.loaded.spec.model_dump_json()}|{sigma}|{args.batches}"
+    ref, ref_se = cached(
+        args.cache,
+        key,
+        lambda: volpath_luminance(reference, sigma, haze.albedo, haze.g, args.batches, 200000),
+    )
+    clean_ref, _ = cached(
+        args.cache,
+        key + "|clean",
+        lambda: volpath_luminance(reference, 0.0, haze.albedo, haze.g, 4, 300000),
+    )
 
     spec = with_overrides(base, mode="physical", levels=[v])
     session = open_session(spec)
@@ -159,12 +208,21 @@ def main() -> None:
     regions = region_masks(pixels.distance_m, pixels.instance)
     regions |= {f"vessel {i}": pixels.instance == i for i in range(3)}
     rows = np.arange(pixels.instance.shape[0])[:, None] * np.ones_like(pixels.instance)
+    if renderer.field is not None:
+        from seahaze.render.pixel_density import pixel_density_ratio
+
+        ratio = pixel_density_ratio(renderer.field, renderer.geometry)
+        for name in ("sea", "sky", "vessel"):
+            regions[f"{name} dense"] = regions[name] & (ratio > 1.5)
+            regions[f"{name} thin"] = regions[name] & (ratio < 1 / 1.5)
     for band in np.array_split(np.arange(rows.shape[0]), args.bands) if args.bands else []:
         in_band = np.isin(rows, band)
         for name in ("sky", "sea"):
             regions[f"{name} r{band[0]}-{band[-1]}"] = regions[name] & in_band
     fog = haze.fog_layer
     layer = "" if fog is None else f", fog layer to {fog.top_m:g} m (×{fog.above_ratio:g} above)"
+    layer += "" if args.patches is None else f", patches {args.patches}"
+    layer += "" if args.bank is None else f", bank {args.bank}"
     print(
         f"V = {v:g} m, g = {haze.g}, sun × {args.sun}, sky × {args.sky} ({base.sky.model}, "
         f"sun at {base.sun.elevation_deg:g}°), camera at {base.camera.height_m:g} m{layer}; "

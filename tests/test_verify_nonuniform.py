@@ -144,13 +144,19 @@ def test_fit_over_each_targets_rays_is_exact_where_the_mean_length_is_not():
     assert abs(on_means.sigma / sigma - 1.0) > 1e-3
 
 
-@pytest.mark.parametrize(
-    ("scene", "fields"),
-    [("patchy.yaml", "scene's haze.patches ("), ("fogbank.yaml", "haze.patches and haze.bank (")],
-)
-def test_physical_mode_is_refused_in_one_line(scene, fields, capsys, tmp_path):
-    code = main(["verify", str(SCENES / scene), "--mode", "physical", "--out", str(tmp_path)])
-    err = capsys.readouterr().err
-    assert code == 2 and len(err.strip().splitlines()) == 1
-    assert "--mode physical" in err and fields in err and "allowed modes: reference, asm" in err
-    assert not (tmp_path / "report.json").exists()
+def test_physical_mode_measures_varying_haze(tmp_path):
+    """``physical`` renders patches as each pixel's equivalent profile (render.pixel_density):
+    verify runs it and reports every target against its own rays' optical depth."""
+    res = "{}x{}".format(*SMALL_RES)
+    out = tmp_path / "v"
+    code = main(
+        ["verify", str(PATCHY), "--mode", "physical", "--vis", "2000", "--res", res,
+         "--spp", "4", "--batches", "2", "--out", str(out), "--quiet"]
+    )  # fmt: skip
+    report = json.loads((out / "report.json").read_text())
+    assert code in (0, 1) and report["config"]["mode"] == "physical"
+    (level,) = report["levels"]
+    assert level["varies_across"] is True and len(level["targets"]) == 12
+    # Measured against each target's own rays, not against a uniform haze's σ d.
+    ratios = [t["mean_density"] for t in level["targets"]]
+    assert max(ratios) > 1.1 * min(ratios)

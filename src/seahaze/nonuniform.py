@@ -27,8 +27,9 @@ Modes
     ``asm`` composites with these per-pixel optical depths; ``reference`` path-traces the
     field itself, evaluated exactly in the render kernel
     (:class:`seahaze.render.field_medium.FieldMedium`: no grid, only Monte Carlo noise). The
-    ``physical`` mode's estimators rest on a density that varies with height alone and do not
-    render this medium (the scene file is refused with that reason).
+    ``physical`` mode's estimators rest on a density that varies with height alone: it renders
+    each pixel's equivalent profile, :attr:`NonUniformHaze.profile` scaled by the pixel's
+    density ratio (:mod:`seahaze.render.pixel_density`).
 """
 
 from __future__ import annotations
@@ -73,7 +74,8 @@ class HorizontalView:
 class NonUniformHaze(HazeMedium):
     """``c · ρ_v(z) · m(x, y, z)`` (module docstring). Vertical questions (bounds, optics)
     are the profile's; ``reduced_length`` and friends, which assume a density that varies
-    with height alone, are not available (the ``physical`` mode is refused)."""
+    with height alone, are not available (the ``physical`` mode asks the profile, per pixel:
+    :mod:`seahaze.render.pixel_density`)."""
 
     profile: HazeMedium
     field: HazeField
@@ -137,7 +139,7 @@ class NonUniformHaze(HazeMedium):
         enter, leave = self.profile.span(oz, d[:, 2], NUMPY)
         leave = np.minimum(leave, dist)
         length = np.maximum(leave - enter, 0.0)
-        panels = np.ceil(length / self._panel_length(d[:, 2])).astype(np.int64)
+        panels = np.ceil(length / self.panel_length(d[:, 2])).astype(np.int64)
         out = np.zeros(len(d))
         # Rays grouped by a power-of-two panel count: one array shape per group.
         counts = np.where(panels > 0, 2 ** np.ceil(np.log2(np.maximum(panels, 1))), 0)
@@ -151,7 +153,7 @@ class NonUniformHaze(HazeMedium):
                 )
         return out.reshape(shape)
 
-    def _panel_length(self, dz: np.ndarray) -> np.ndarray:
+    def panel_length(self, dz: np.ndarray) -> np.ndarray:
         """Longest panel along a ray with direction z component ``dz`` (m): the field's
         horizontal scale, its vertical scale and a quarter of a fog layer's edge over the
         height the ray climbs per metre."""
@@ -278,7 +280,7 @@ class NonUniformHaze(HazeMedium):
         raise NotImplementedError(_PHYSICAL)
 
 
-_PHYSICAL = "the physical mode renders haze that varies with height alone"
+_PHYSICAL = "the density varies across the sea: ask the profile, scaled per pixel"
 
 
 def _digest(*arrays: np.ndarray) -> str:

@@ -788,7 +788,9 @@ class HazeSpec(_Spec):
         description="Patches of denser and thinner fog across the sea (default none). With "
         "`patches` or `bank` a level's visibility is that of the mean extinction along the "
         "horizontal lines of sight at camera height over the view (docs/physics.md, 'Haze "
-        "that varies across the sea'); `render.mode` must be `asm` or `reference`.",
+        "that varies across the sea'). `physical` renders each pixel's equivalent profile, "
+        "too bright at thick levels (docs/physics.md, 'Haze that varies across the sea in "
+        "the physical mode'); `reference` path-traces the field.",
     )
     bank: BankSpec | None = Field(
         None,
@@ -1407,16 +1409,6 @@ class SceneSpec(_Spec):
             raise ValueError(
                 f"variation.camera_height_m [{varied[0]:g}, {varied[1]:g}] does not fit a "
                 f"sequence's mast; allowed: within {low:g}..{high:g} m"
-            )
-        return self
-
-    @model_validator(mode="after")
-    def _varying_haze_needs_a_mode_that_renders_it(self) -> SceneSpec:
-        varies = self.haze.patches is not None or self.haze.bank is not None
-        if varies and self.render.mode == "physical":
-            raise ValueError(
-                "haze.patches and haze.bank need render.mode asm or reference: the physical "
-                "mode renders haze that varies with height alone; allowed: asm, reference"
             )
         return self
 

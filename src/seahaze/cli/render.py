@@ -149,8 +149,27 @@ def _block_location(file: str | None, key: str) -> str:
 
 
 def _warn_below_validated_range(plan: Any) -> None:
-    """A warning for levels thinner than the mode's validated range (docs/physics.md)."""
+    """A warning for levels thinner than the mode's validated range (docs/physics.md): its
+    own for haze that varies across the sea where a job has it."""
     for mode in sorted({job.spec.render.mode for job in plan.jobs}):
+        varying = any(
+            job.spec.haze.patches is not None or job.spec.haze.bank is not None
+            for job in plan.jobs
+            if job.spec.render.mode == mode
+        )
+        if varying and mode in limits.VARYING_VALIDATED_FROM_M:
+            floor = limits.VARYING_VALIDATED_FROM_M[mode]
+            below = sorted(v for v in plan.levels if v < floor)
+            if below:
+                print(
+                    f"seahaze: warning: in haze that varies across the sea the {mode} mode is "
+                    f"validated (within 3 % of converged references) down to V = {floor:g} m; "
+                    f"{', '.join(f'{v:g}' for v in below)} m lie below it, where dense patches "
+                    "render too bright (docs/physics.md); --mode reference is unbiased there "
+                    "but slow",
+                    file=sys.stderr,
+                )
+                continue
         floor = limits.VALIDATED_FROM_M.get(mode)
         below = sorted(v for v in plan.levels if floor is not None and v < floor)
         if below:

@@ -143,8 +143,23 @@ class HazeIntegrator(mi.SamplingIntegrator):
         # Where the sea's sun glint lies seen from a hull (glint_lobe module).
         self.glint = glint_lobe.GlintLobe(sun_axis(sun), wind_speed, settings.glint_share)
         self.levels = PassLevels(medium, n_levels, grey)
+        self.pixel_ratio: Any = None
         # A parameter: another count reuses the kernel.
         self.camera_points = dr.opaque(mi.UInt32, settings.camera_points)
+
+    def set_pixel_ratio(self, pixel_ratio: Any) -> None:
+        """Render each pixel's equivalent profile (:mod:`seahaze.render.pixel_density`):
+        ``pixel_ratio`` is a :class:`~seahaze.render.pixel_density.PixelRatio` of the frame,
+        or None for haze that varies with height alone. The medium is then the field's
+        vertical profile."""
+        self.pixel_ratio = pixel_ratio
+
+    def start_camera_path(self, ray: Any, active: Any) -> None:
+        """Point the levels at the density ratio of camera ray ``ray``'s pixel, where the
+        pass renders haze that varies across the sea (:meth:`set_pixel_ratio`): every
+        segment of the path sees the pixel's equivalent profile."""
+        pixel = None if self.pixel_ratio is None else self.pixel_ratio.at(ray, active)
+        self.levels.start(pixel)
 
     def aov_names(self) -> list[str]:
         return [f"{k}.{c}" for k in range(self.n_levels) for c in "RGB"]
@@ -212,7 +227,7 @@ class HazeIntegrator(mi.SamplingIntegrator):
         hidden = lit & scene.ray_test(ray, lit)
         mis = mis_weight(pdf, self.glint.continuation_pdf(share, bsdf_pdf, d))
         weight = p.beta * value * source * mis / dr.maximum(pdf, 1e-30)
-        climb = 1.0 - d.z / dr.maximum(sun_d.z, 1e-6)
+        climb = levels.sun_climb(d.z, dr.maximum(sun_d.z, 1e-6))
         for k in range(self.n_levels):
             # The segment enters the medium where the sun's sample left from (or at the
             # bottom, from below it): the depth toward the sun there is the sample's.
@@ -236,7 +251,8 @@ class HazeIntegrator(mi.SamplingIntegrator):
         # In reduced height the medium is a homogeneous slab (seahaze.medium): the segment
         # climbs d_z per metre of reduced length from its entry's reduced height.
         h_entry = levels.reduced_height(ray.o.z + enter * ray.d.z)
-        depth, climb = levels.depth_toward_sun(h_entry, mu_sun), 1.0 - ray.d.z / mu_sun
+        depth = levels.depth_toward_sun(h_entry, mu_sun)
+        climb = levels.sun_climb(ray.d.z, mu_sun)
         pick = sampler.next_1d(active)
         tables = levels.table.toward(-ray.d, levels.sun_cos_az, levels.sun_sin_az, pick)
         mass = [levels.mass(k, length) for k in range(self.n_levels)]
@@ -260,7 +276,7 @@ class HazeIntegrator(mi.SamplingIntegrator):
         from the same stratified numbers (common random numbers). A symbolic loop, so that the
         camera segment's several points and a later segment's one share the kernel's code."""
         levels = self.levels
-        inv_top = 1.0 / self.medium.reduced_top_m
+        inv_top = levels.inv_reduced_top()
         count = mi.Float(n_points)
 
         def body(i, sampler, sums):
@@ -299,6 +315,7 @@ class HazeIntegrator(mi.SamplingIntegrator):
         points, added to ``p``; returns both the transmittances and what the sun's part drew
         (:meth:`inscatter`)."""
         levels = self.levels
+        levels.follow_segment(p.depth == 0)
         enter, length = levels.segment(p.ray.o, p.ray.d, t_end)
         segment = [levels.transmittance(k, length) for k in range(self.n_levels)]
         sun_mis = dr.select(p.prev_delta, 1.0, mis_weight(p.prev_pdf, self.aureole_pdf(p.ray.d)))
@@ -378,6 +395,7 @@ class HazeIntegrator(mi.SamplingIntegrator):
         emitter sample from the sun and one from the sky (not one from sunsky's mixture of
         both), each level attenuated toward the emitter, and the aureole."""
         levels = self.levels
+        levels.follow_segment(mi.Bool(False))  # what leaves a surface sees the haze around it
         ctx = mi.BSDFContext()
         bsdf = si.bsdf(p.ray)
         active = p.active
@@ -391,7 +409,7 @@ class HazeIntegrator(mi.SamplingIntegrator):
             value, bsdf_pdf = bsdf.eval_pdf(ctx, si, si.to_local(ds_e.d), drawn)
             mis_e = mis_weight(ds_e.pdf, self.glint.continuation_pdf(share, bsdf_pdf, ds_e.d))
             direct = dr.select(drawn, p.beta * value * em_w * mis_e, 0.0)
-            _, e_length = levels.segment(si.p, ds_e.d)
+            _, e_length = levels.light_segment(si.p, ds_e.d)
             if sun is not None:
                 # Where nothing was drawn the sky's direction may be NaN (its sampler at the
                 # ends of its erfinv): its transmittance would make 0 · NaN = NaN.
@@ -421,7 +439,9 @@ class CameraPass(HazeIntegrator):
     """The main ``physical`` pass: camera paths for the clean image and every level."""
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
+        self.start_camera_path(ray, mi.Bool(active))
         path = HazePath.start(mi.Ray3f(ray), mi.Bool(active), self.n_levels, self.grey)
         path = self.follow(scene, sampler, path)
+        self.levels.start(None)  # traced: the next trace sets its own
         aovs = [c for r in path.res for c in (r.x, r.y, r.z)]
         return mi.Spectrum(path.clean), mi.Bool(True), aovs

@@ -11,6 +11,16 @@ Every answer is given in reduced length and reduced height, where any medium of
 :class:`~seahaze.medium.HazeMedium` (a vertical profile) is a homogeneous slab, so the closed
 forms hold for every profile (:mod:`seahaze.medium`); the medium maps reduced heights and
 distances back to points.
+
+In haze that varies across the sea a pass renders each pixel's equivalent profile
+(:mod:`seahaze.render.pixel_density`): :meth:`PassLevels.start` gives it, per lane, the
+density ratios of the camera path's pixel, and every answer is the profile's scaled by them.
+Along the camera segment reduced lengths and heights are the profile's times the ``view``
+ratio ``r`` (a reduced distance divided by it to find its point) and depths toward the sun
+times the ``sun_air`` ratio ``r_s``; along the later segments, which leave a surface, and the
+rays from a surface toward the lights, both are times the ``sun_surface`` ratio (the haze
+around the surface). None, as for every other haze, leaves the kernels exactly as they
+were.
 """
 
 from __future__ import annotations
@@ -31,6 +41,13 @@ from . import jit_haze
 from .table_texture import TableTexture
 
 
+def dr_select(condition: Any, a: Any, b: Any) -> Any:
+    """``drjit.select``, imported when a kernel is traced."""
+    import drjit as dr
+
+    return dr.select(condition, a, b)
+
+
 class PassLevels:
     """The levels of one pass (see the module docstring). ``grey`` levels have one
     extinction for R, G and B: their transmittances are one exponential, not three."""
@@ -38,6 +55,12 @@ class PassLevels:
     def __init__(self, medium: HazeMedium, n_levels: int, grey: bool):
         self.medium, self.n_levels, self.grey = medium, n_levels, grey
         self.ops = drjit_ops()
+        self.pixel: Any = None
+        """Per lane, the ``view``, ``sun_air`` and ``sun_surface`` density ratios of the
+        camera path's pixel (drjit Floats), or None: the medium's profile as it is (module
+        docstring). Set by the pass before it traces (:meth:`start`)."""
+        self.ratio: Any = None
+        """The ratios of the segment being followed: along it, toward the sun from it."""
         self.set(
             np.full((n_levels, 3), 1e-3),
             np.full(n_levels, 1.0 / n_levels),
@@ -89,10 +112,31 @@ class PassLevels:
         self.sun_cos_az, self.sun_sin_az = (opaque(f(sun_azimuth_rad)) for f in (np.cos, np.sin))
         self.table = TableTexture(tables, self.n_levels, folded)
 
+    def start(self, pixel: Any) -> None:
+        """Point the kernels at a camera path of a pixel with ratios ``pixel`` (``view``,
+        ``sun_air``, ``sun_surface``; None: no scaling), its camera segment first."""
+        self.pixel = pixel
+        self.ratio = None if pixel is None else (pixel[0], pixel[1])
+
+    def follow_segment(self, first: Any) -> None:
+        """Point the kernels at the path's next segment: the camera's where ``first``, else
+        one that leaves a surface (module docstring)."""
+        if self.pixel is not None:
+            view, sun_air, surface = self.pixel
+            self.ratio = (dr_select(first, view, surface), dr_select(first, sun_air, surface))
+
     # -- where the medium is along a ray ----------------------------------------------------
     def segment(self, p: Any, d: Any, t_end: Any = None) -> tuple[Any, Any]:
         """Where ``p + s d`` enters the medium and its reduced length up to ``t_end`` (m)."""
-        return self.medium.reduced_length(p.z, d.z, t_end, self.ops)
+        enter, length = self.medium.reduced_length(p.z, d.z, t_end, self.ops)
+        return enter, length if self.ratio is None else length * self.ratio[0]
+
+    def light_segment(self, p: Any, d: Any) -> tuple[Any, Any]:
+        """As :meth:`segment`, for a ray from a surface toward a light: where the pass
+        renders pixels' equivalent profiles, through the column above the pixel's surface
+        (its ``sun_surface`` ratio)."""
+        enter, length = self.medium.reduced_length(p.z, d.z, None, self.ops)
+        return enter, length if self.pixel is None else length * self.pixel[2]
 
     def transmittance(self, k: int, length: Any) -> Any:
         """Level ``k``'s transmittance over reduced length ``length``: a Float for grey
@@ -101,17 +145,39 @@ class PassLevels:
 
     def reduced_height(self, z: Any) -> Any:
         """The reduced height (m) of height ``z``."""
-        return self.medium.reduced_height(z, self.ops)
+        h = self.medium.reduced_height(z, self.ops)
+        return h if self.ratio is None else h * self.ratio[0]
+
+    def inv_reduced_top(self) -> Any:
+        """``1/H``, the reciprocal of the reduced height of the medium's top (1/m): where a
+        reduced height lies on the diffuse tables' height axis."""
+        inv_top = 1.0 / self.medium.reduced_top_m
+        return inv_top if self.ratio is None else inv_top / self.ratio[0]
 
     def distance_at(self, ray: Any, enter: Any, reduced: Any) -> Any:
         """The parameter (m) along ``ray`` of the point ``reduced`` metres of reduced length
         past its entry into the medium at ``enter``."""
+        if self.ratio is not None:
+            reduced = reduced / self.ratio[0]
         return self.medium.distance_at(ray.o.z, ray.d.z, enter, reduced, self.ops)
 
     def depth_toward_sun(self, h: Any, mu_sun: Any) -> Any:
         """The reduced length (m) from reduced height ``h`` out of the medium toward the
         sun."""
-        return self.medium.depth_toward_sun(h, mu_sun, self.ops)
+        if self.ratio is None:
+            return self.medium.depth_toward_sun(h, mu_sun, self.ops)
+        view, sun = self.ratio
+        return self.medium.depth_toward_sun(h / view, mu_sun, self.ops) * sun
+
+    def sun_climb(self, dz: Any, mu_sun: Any) -> Any:
+        """How a segment's depth toward the sun grows per metre of its reduced length:
+        ``1 − d_z / μ_sun`` (back to the segment's start, less the climb toward the sun),
+        the climb scaled by ``r_s / r`` where the pass renders pixels' equivalent
+        profiles."""
+        if self.ratio is None:
+            return 1.0 - dz / mu_sun
+        view, sun = self.ratio
+        return 1.0 - dz / mu_sun * (sun / view)
 
     # -- distances along a segment ----------------------------------------------------------
     def mass(self, k: int, length: Any) -> Any:

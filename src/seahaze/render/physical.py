@@ -10,6 +10,10 @@ the passes need from the scene — the sun and sky as separate emitters, the sea
 pre-sampled for photons (:mod:`seahaze.render.photon_sources`), the medium — and runs them in
 groups of levels, so that a long list of levels never needs one huge film. The estimator's
 tuning is one :class:`~seahaze.render.estimator.EstimatorSettings`, passed in.
+
+Haze that varies across the sea (patches, a bank) is rendered as each pixel's equivalent
+profile (:mod:`seahaze.render.pixel_density`): the passes and tables see the field's vertical
+profile, and each camera path scales it by its pixel's density ratio.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ import numpy as np
 
 from ..haze import Extinction, extinction_rgb
 from ..medium import HazeMedium
+from ..nonuniform import NonUniformHaze
 from ..seeds import RenderPass, render_seed
 from ..spec import SceneSpec
 from ..world import wind_speed
@@ -32,9 +37,11 @@ from .diffuse_table import DEFAULT_GRID, UNFOLDED_GRID, TableGrid, build_tables
 from .estimator import DEFAULT_SETTINGS, EstimatorSettings
 from .passes import GeometryPass, render_geometry, render_radiance
 from .photon_sources import emitter_photons, sample_sea_reflectance, sea_bsdf
+from .pixel_density import PixelRatio, pixel_ratios
 from .scene import SEA_SHAPE, LoadedScene, stratified_spp
 from .segment_smooth import segments, smooth_within_segments
 from .sky import sun_and_sky_dicts
+from .sun_disk import sun_axis
 
 FILM_BUDGET_BYTES = 2 << 30
 """Most memory the film of one pass may take; more levels are rendered in several passes,
@@ -84,7 +91,12 @@ class PhysicalRenderer:
         first needs it)."""
         import mitsuba as mi
 
-        self.loaded, self.settings, self.medium = loaded, settings, loaded.medium
+        self.loaded, self.settings = loaded, settings
+        # Haze that varies across the sea: the passes render its vertical profile, scaled
+        # per pixel (pixel_density module); the ratios are the frame's, found when rendered.
+        self.field = loaded.medium if isinstance(loaded.medium, NonUniformHaze) else None
+        self.medium = loaded.medium if self.field is None else self.field.profile
+        self.pixel_ratio: PixelRatio | None = None
         # The sun and the sky as separate emitters: the sun's single scattering is computed
         # per pixel with shadow rays, the sky's goes into the table.
         sun, sky = sun_and_sky_dicts(spec, loaded.elapsed_s)
@@ -163,6 +175,9 @@ class PhysicalRenderer:
             say(f"diffuse tables ({photons:,} photons)")
         tables = self.tables(sigma, albedo, g, seed, photons) if len(sigma) else None
         table_seconds = time.perf_counter() - start
+        if self.field is not None and self.pixel_ratio is None:
+            say("pixel density ratios")
+            self.pixel_ratio = self.pixel_ratios()
         most = self.settings.max_levels_per_pass
         group = levels_per_pass(cam.width, cam.height, len(sigma), most)
         groups = -(-max(len(sigma), 1) // group)
@@ -195,6 +210,15 @@ class PhysicalRenderer:
                 levels += [np.maximum(image[..., 3 + 3 * k : 6 + 3 * k], 0.0) for k in range(n)]
         assert clean is not None
         return PhysicalPass(clean, levels, table_seconds)
+
+    def pixel_ratios(self) -> PixelRatio:
+        """Each pixel's density ratios in the scene's field (:func:`pixel_ratios`), from the
+        geometry pass's pixel-centre rays and the sun's direction, for the kernels."""
+        assert self.field is not None
+        if self.geometry is None:
+            self.geometry = render_geometry(self.loaded)
+        ratios = pixel_ratios(self.field, self.geometry, sun_axis(self.sun))
+        return PixelRatio(self.loaded.scene.sensors()[0], ratios)
 
     def vessel_light(
         self,
@@ -232,11 +256,12 @@ class PhysicalRenderer:
     ) -> Any:
         """The ``kind`` (``camera`` or ``vessel_light``) pass's integrator for levels of
         extinction ``sigma`` (L, 3) with their ``tables``, pointed at them. One integrator,
-        and so one compiled kernel, per kind, level count, greyness and medium shape."""
+        and so one compiled kernel, per kind, level count, greyness and medium shape (and
+        whether it renders pixels' equivalent profiles)."""
         n = len(sigma)
         grey = bool(np.all(sigma == sigma[:, 1:2]))
         medium: HazeMedium = self.medium.with_optics(albedo, g)
-        key = (kind, n, grey, medium.with_optics(0.0, 0.0))
+        key = (kind, n, grey, medium.with_optics(0.0, 0.0), self.field is not None)
         if key not in self.integrators:
             camera, vessel_light = integrator_classes()
             cls = {"camera": camera, "vessel_light": vessel_light}[kind]
@@ -244,6 +269,7 @@ class PhysicalRenderer:
                 self.sun, self.sky, medium, n, grey, self.wind_speed, self.settings
             )
         integrator = self.integrators[key]
+        integrator.set_pixel_ratio(self.pixel_ratio)
         integrator.levels.set(
             sigma, np.full(n, 1.0 / n), albedo, g, tables, self.sun_azimuth_rad, self.grid.folded
         )

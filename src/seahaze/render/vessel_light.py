@@ -61,11 +61,13 @@ class VesselLightPass(HazeIntegrator):
     def sample(self, scene, sampler, ray, medium=None, active=True):
         """The correction pass: :meth:`vessel_light` along the camera segment, for every
         level (no clean radiance)."""
+        self.start_camera_path(ray, mi.Bool(active))
         si = scene.ray_intersect(ray, active)
         t_end = dr.select(si.is_valid(), si.t, dr.inf)
         enter, length = self.levels.segment(ray.o, ray.d, t_end)
         res = [dr.zeros(mi.Color3f) for _ in range(self.n_levels)]
         self.vessel_light(scene, sampler, ray, enter, length, res, active & (length > 0.0))
+        self.levels.start(None)  # traced: the next trace sets its own
         aovs = [c for r in res for c in (r.x, r.y, r.z)]
         return mi.Spectrum(0.0), mi.Bool(True), aovs
 
@@ -147,7 +149,8 @@ class VesselLightPass(HazeIntegrator):
         # The mixture alone where no probe is drawn near a vessel (no loop over the vessels)
         # and in a medium whose reduced lengths are not lengths: the near strategy draws
         # metres from the ray's closest approach to a vessel.
-        if self.settings.near_share <= 0.0 or not self.medium.reduced_is_geometric:
+        geometric = self.medium.reduced_is_geometric and self.pixel_ratio is None
+        if self.settings.near_share <= 0.0 or not geometric:
             return levels.mixture_distance(u, length)
         total, chosen, u = self.draw(lambda i: self.along_ray(i, ray, enter, length)[3], u, active)
         near_share = dr.select(total > 0.0, self.settings.near_share, 0.0)

@@ -26,9 +26,9 @@ import numpy as np
 from ..camera import Camera
 from ..nonuniform import NonUniformHaze
 from ..scene_medium import scene_haze_medium
-from ..spec import RENDER_MODES, SceneSpec
+from ..spec import SceneSpec
 from .fit import RayLengths
-from .targets import Target, VerifyInputError, sky_pixels, target_pixels
+from .targets import Target, sky_pixels, target_pixels
 
 DENSE_RATIO = 1.15
 """A target whose ray's mean density ``ℓ/d`` exceeds this stands in dense haze (a patch)."""
@@ -41,17 +41,6 @@ FIELD_FIELDS = ("patches", "bank")
 def field_names(spec: SceneSpec) -> list[str]:
     """The ``haze.*`` fields of ``spec`` that vary the haze across the sea."""
     return [f"haze.{name}" for name in FIELD_FIELDS if getattr(spec.haze, name) is not None]
-
-
-def check_mode(spec: SceneSpec, mode: str) -> None:
-    """Raise :class:`VerifyInputError` (one line) when ``mode`` cannot render ``spec``'s haze."""
-    names = field_names(spec)
-    if mode == "physical" and names:
-        allowed = ", ".join(m for m in RENDER_MODES if m != "physical")
-        raise VerifyInputError(
-            f"--mode physical: the scene's {' and '.join(names)} (haze that varies across the "
-            f"sea) the physical mode does not render; allowed modes: {allowed}"
-        )
 
 
 def calibration_medium(base: SceneSpec) -> NonUniformHaze | None:

@@ -29,7 +29,6 @@ from ..visibility import (
 from ..world import SceneGeometry, Sea, build_sea
 from .field import (
     calibration_medium,
-    check_mode,
     coverage,
     optical_depth_ratio,
     target_ray_lengths,
@@ -419,7 +418,6 @@ def run_verify(
     """
     settings = settings or VerifySettings()
     settings.check()
-    check_mode(base, settings.mode)
     if not visibilities_m:
         raise VerifyInputError("no visibility level to verify")
     if base.camera.height_m >= base.haze.top_m:

@@ -1,0 +1,154 @@
+"""The ``physical`` mode in haze that varies across the sea: each pixel's equivalent profile.
+
+* The pixel density ratio is the field's reduced length over the profile's along the
+  pixel-centre ray, each checked against an independent integration (Simpson's rule on the
+  field, the slab's chord in closed form).
+* A camera ray, wherever it leaves through its pixel, reads that pixel's ratio: the kernel's
+  projection onto the film is the sensor's own.
+* End to end: a field of uniform density ratio 2 with nothing scattering renders, in every
+  pixel and every segment (camera, sea, vessels, light rays), the slab at twice the extinction;
+  a field of ratio 1 renders what the slab renders, scattering included.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import simpson
+
+from conftest import small_spec
+from seahaze.haze_field import HazeField, Patches
+from seahaze.medium import HomogeneousSlab
+from seahaze.nonuniform import RAY_REACH_M, NonUniformHaze
+
+pytestmark = pytest.mark.usefixtures("mitsuba_variant")
+
+SLAB = HomogeneousSlab(top=300.0, albedo=0.998, g=0.75)
+PATCHES = Patches(300.0, 3.0, 60.0, 20.0, seed=5)
+SPEC = small_spec(
+    camera={"height_m": 12.0, "pitch_deg": -1.0, "fov_deg": 50.0},
+    vessels={"placed": [{"class": "tug", "distance_m": 300, "bearing_deg": 4, "length_m": 30}]},
+    haze={"top_m": 300.0, "levels": [800.0]},
+    render={"mode": "physical", "spp": 4, "seed": 3},
+)
+
+
+def _session(medium):
+    from seahaze.render.engine import open_session
+
+    return open_session(SPEC, medium=medium)
+
+
+def test_the_ratio_is_the_fields_reduced_length_over_the_profiles():
+    from seahaze.render.pixel_density import pixel_density_ratio
+
+    medium = NonUniformHaze(SLAB, HazeField(PATCHES), 0.9)
+    geometry = _session(medium).pixels
+    ratio = pixel_density_ratio(medium, geometry)
+    rng = np.random.default_rng(1)
+    rows = rng.integers(0, ratio.shape[0], 12)
+    cols = rng.integers(0, ratio.shape[1], 12)
+    origin = geometry.origin.astype(np.float64)
+    for row, col in zip(rows, cols, strict=True):
+        d = geometry.directions[row, col].astype(np.float64)
+        d /= np.linalg.norm(d)
+        end = min(float(geometry.distance_m[row, col]), RAY_REACH_M)
+        # The slab's chord: from the camera (inside it) to its top, the surface or the reach.
+        chord = end if d[2] <= 0 else min(end, (SLAB.top - origin[2]) / d[2])
+        s = np.linspace(0.0, chord, 40_001)
+        p = origin[None, :] + s[:, None] * d[None, :]
+        field = simpson(medium.density_at(p[:, 0], p[:, 1], p[:, 2]), x=s)
+        np.testing.assert_allclose(ratio[row, col], field / chord, rtol=1e-4)
+    assert ratio.max() > 1.5 * ratio.min()  # the patches show: the ratio varies
+
+
+def test_the_suns_depth_through_the_field_is_an_independent_integral():
+    """The field's reduced length toward the sun from points in view (the kernel's
+    quadrature, float32) against Simpson's rule on the numpy field; the profile's is the
+    slab's depth in closed form."""
+    from seahaze.render.pixel_density import sun_depths
+
+    medium = NonUniformHaze(SLAB, HazeField(PATCHES), 0.9)
+    sun = np.array([0.5, -0.3, 0.6])
+    sun /= np.linalg.norm(sun)
+    rng = np.random.default_rng(4)
+    points = np.stack(
+        [rng.uniform(-2000, 2000, 10), rng.uniform(0, 3000, 10), rng.uniform(0, 250, 10)], 1
+    )
+    field, profile = sun_depths(medium, points, sun)
+    for k, p in enumerate(points):
+        length = (SLAB.top - p[2]) / sun[2]
+        s = np.linspace(0.0, length, 20_001)
+        q = p[None, :] + s[:, None] * sun[None, :]
+        want = simpson(medium.density_at(q[:, 0], q[:, 1], q[:, 2]), x=s)
+        np.testing.assert_allclose(field[k], want, rtol=3e-4)
+        np.testing.assert_allclose(profile[k], length, rtol=1e-12)
+    assert field.max() > 1.3 * field.min() * profile.max() / profile.min()
+
+
+def test_a_camera_ray_reads_the_ratio_of_its_own_pixel():
+    import drjit as dr
+    import mitsuba as mi
+
+    from seahaze.render.pixel_density import PixelRatio, PixelRatios
+
+    session = _session(None)
+    sensor = session.loaded.scene.sensors()[0]
+    height, width = session.pixels.distance_m.shape
+    index = np.arange(height * width, dtype=np.float64).reshape(height, width)
+    # +1: a ratio of 0 would be clamped; the three ratios told apart by their offsets.
+    lookup = PixelRatio(sensor, PixelRatios(index + 1.0, index + 2.0, index + 3.0))
+    rng = np.random.default_rng(2)
+    pixel = rng.integers(0, height * width, 4000)
+    # Anywhere inside the pixel, its corners excepted (a float32 step from the next one).
+    jitter = rng.uniform(0.01, 0.99, (2, pixel.size))
+    x = (pixel % width + jitter[0]) / width
+    y = (pixel // width + jitter[1]) / height
+    film = mi.Point2f(mi.Float(x), mi.Float(y))
+    ray, _ = sensor.sample_ray(0.0, 0.5, film, mi.Point2f(0.5, 0.5))
+    got = [np.asarray(r, np.float64) for r in lookup.at(ray, mi.Bool(True))]
+    for offset, ratio in enumerate(got, start=1):
+        np.testing.assert_array_equal(ratio - offset, pixel)
+    assert dr.width(ray.d) == pixel.size
+
+
+def _renderer(medium, settings=None):
+    from seahaze.render.estimator import EstimatorSettings
+    from seahaze.render.physical import PhysicalRenderer
+
+    session = _session(medium)
+    settings = settings or EstimatorSettings()
+    return PhysicalRenderer(session.loaded, SPEC, settings, geometry=session.pixels)
+
+
+def test_a_field_twice_as_dense_everywhere_is_the_slab_at_twice_the_extinction():
+    """With the slab's diffuse field at 2σ, every pass of the field at σ is the slab's at
+    2σ: transmittances of every segment (camera, sea, vessels, rays toward the lights),
+    distances drawn in reduced length and the points they map to, the sun's depth and the
+    tables' heights — all scaled by the ratio. Same random numbers, so equal to rounding.
+    The vessel-light pass is left out: its near-vessel probes need a geometric medium."""
+    from seahaze.render.estimator import EstimatorSettings
+
+    settings = EstimatorSettings(vessel_light_share=0.0)
+    sigma = 3.912 / 1500.0
+    slab = _renderer(SLAB, settings)
+    field = _renderer(NonUniformHaze(SLAB, HazeField(), 2.0), settings)
+    # The tables hold the source per metre, σ J: the slab's at 2σ, per unit σ of the field.
+    field.tables = lambda s, *args, **kw: 0.5 * slab.tables(2.0 * s, *args, **kw)
+    got = field.render([sigma], 0.998, 0.75, 4, seed=9)
+    want = slab.render([2.0 * sigma], 0.998, 0.75, 4, seed=9)
+    np.testing.assert_array_equal(got.clean, want.clean)
+    np.testing.assert_allclose(got.levels[0], want.levels[0], rtol=1e-4, atol=1e-6)
+    # Haze there was: the level is not the clean image, nor the level at σ.
+    once = slab.render([sigma], 0.998, 0.75, 4, seed=9)
+    assert np.abs(got.levels[0] / once.levels[0] - 1.0).mean() > 0.05
+
+
+def test_a_field_of_ratio_one_renders_what_the_slab_renders():
+    """Everything as the slab, the vessel-light pass included (without its near-vessel
+    probes: the same light, other noise)."""
+    sigma = 3.912 / 800.0
+    field = _renderer(NonUniformHaze(SLAB, HazeField(), 1.0)).render([sigma], 0.998, 0.75, 4, 9)
+    slab = _renderer(SLAB).render([sigma], 0.998, 0.75, 4, 9)
+    np.testing.assert_array_equal(field.clean, slab.clean)
+    assert abs(field.levels[0].mean() / slab.levels[0].mean() - 1.0) < 0.01
