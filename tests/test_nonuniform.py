@@ -241,13 +241,15 @@ render: {mode: asm, spp: 1, seed: 3}
 """
 
 
-def test_a_bank_rolling_in_darkens_the_view_frame_by_frame(tmp_path):
+@pytest.mark.parametrize("mode", ["asm", "physical"])
+def test_a_bank_rolling_in_darkens_the_view_frame_by_frame(tmp_path, mode):
     """A bank drifting toward the camera at 25 m/s (edge at 700, 600, 500 m at 0, 4, 8 s): the
     sequence renders end to end, every frame's field is the first one's moved (one density
     scale, the field's time in meta), so the optical depth over the view grows frame by frame
-    and the tug at 300 m, in the clear, keeps almost its own."""
+    and the tug at 300 m, in the clear, keeps almost its own. In both modes that render it
+    frame by frame from the field: asm and physical (each frame's pixel ratios)."""
     path = tmp_path / "bankseq.yaml"
-    path.write_text(BANK_SEQUENCE)
+    path.write_text(BANK_SEQUENCE.replace("mode: asm", f"mode: {mode}"))
     out = tmp_path / "out"
     code, _, err = cli_run(["render", str(path), "--out", str(out), "--quiet"], seconds=120)
     assert code == 0, err
