@@ -25,6 +25,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_passes import replace_section
 
@@ -57,6 +59,7 @@ def child(case: str, res: tuple[int, int], spp: int) -> dict:
     """Render ``case``'s set twice; the warm time, the ratios' time and the memory peak."""
     from seahaze.render.engine import open_session, render_scene
     from seahaze.render.physical import PhysicalRenderer
+    from seahaze.visibility import GRADED_LEVELS_M, extinction_coefficient
 
     spec, name = case_spec(case, res, spp)
     render_scene(spec, name)  # compiles the kernels
@@ -68,7 +71,8 @@ def child(case: str, res: tuple[int, int], spp: int) -> dict:
         session = open_session(spec)
         renderer = PhysicalRenderer(session.loaded, spec, geometry=session.pixels)
         start = time.perf_counter()
-        renderer.pixel_ratios()
+        sigma = [extinction_coefficient(v) for v in GRADED_LEVELS_M]
+        renderer.pixel_ratios(np.asarray(sigma))
         ratios = time.perf_counter() - start
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # KiB -> GiB
     return {"case": case, "warm_s": warm, "ratios_s": ratios, "peak_gib": peak}

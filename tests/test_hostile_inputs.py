@@ -330,15 +330,18 @@ def test_levels_below_the_validated_range_warn(tmp_path, no_render):
 
 
 def test_varying_haze_below_its_validated_range_warns(tmp_path, no_render):
-    """In patches or a bank physical is validated down to 1000 m: a thicker level gets the
-    varying haze's own warning, which names the patches' fault."""
+    """In patches physical is validated down to 1000 m: a thicker level gets the patches' own
+    warning; in a bank it is not validated at all, whatever the level."""
     scene = tmp_path / "patchy.yaml"
     text = TINY.read_text().replace("haze: {levels: [1000]}", "haze: {patches: {}}")
     scene.write_text(text)
     code, _, err = run(["render", str(scene), "--out", str(tmp_path / "o"), "--vis", "300,2000"])
-    assert "haze that varies across the sea the physical mode is validated" in err
     (warning,) = [line for line in err.splitlines() if "validated" in line]
-    assert "; 300 m lie below it" in warning
+    assert "in patchy haze the physical mode is validated" in warning
+    assert "; 300 m lie below it, where dense patches" in warning
     assert code == 1 and "a render started" in err
     code, _, err = run(["render", str(scene), "--out", str(tmp_path / "p"), "--vis", "1000"])
     assert "validated" not in err
+    scene.write_text(text.replace("patches: {}", "bank: {distance_m: 900}"))
+    code, _, err = run(["render", str(scene), "--out", str(tmp_path / "q"), "--vis", "4000"])
+    assert "the physical mode is not validated in a fog bank" in err

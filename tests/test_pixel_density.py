@@ -96,8 +96,9 @@ def test_a_camera_ray_reads_the_ratio_of_its_own_pixel():
     sensor = session.loaded.scene.sensors()[0]
     height, width = session.pixels.distance_m.shape
     index = np.arange(height * width, dtype=np.float64).reshape(height, width)
-    # +1: a ratio of 0 would be clamped; the three ratios told apart by their offsets.
-    lookup = PixelRatio(sensor, PixelRatios(index + 1.0, index + 2.0, index + 3.0))
+    # +1: a ratio of 0 would be clamped; the ratios told apart by their offsets.
+    suns = np.stack([index + 2.0, index + 3.0])
+    lookup = PixelRatio(sensor, PixelRatios(index + 1.0, suns, index + 4.0, index + 5.0))
     rng = np.random.default_rng(2)
     pixel = rng.integers(0, height * width, 4000)
     # Anywhere inside the pixel, its corners excepted (a float32 step from the next one).
@@ -106,7 +107,8 @@ def test_a_camera_ray_reads_the_ratio_of_its_own_pixel():
     y = (pixel // width + jitter[1]) / height
     film = mi.Point2f(mi.Float(x), mi.Float(y))
     ray, _ = sensor.sample_ray(0.0, 0.5, film, mi.Point2f(0.5, 0.5))
-    got = [np.asarray(r, np.float64) for r in lookup.at(ray, mi.Bool(True))]
+    view, (sun_0, sun_1), surface, bounce = lookup.at(ray, mi.Bool(True))
+    got = [np.asarray(r, np.float64) for r in (view, sun_0, sun_1, surface, bounce)]
     for offset, ratio in enumerate(got, start=1):
         np.testing.assert_array_equal(ratio - offset, pixel)
     assert dr.width(ray.d) == pixel.size

@@ -150,33 +150,29 @@ def _block_location(file: str | None, key: str) -> str:
 
 def _warn_below_validated_range(plan: Any) -> None:
     """A warning for levels thinner than the mode's validated range (docs/physics.md): its
-    own for haze that varies across the sea where a job has it."""
+    own where a job's haze varies across the sea (patches: a range of their own; a bank:
+    none)."""
     for mode in sorted({job.spec.render.mode for job in plan.jobs}):
-        varying = any(
-            job.spec.haze.patches is not None or job.spec.haze.bank is not None
-            for job in plan.jobs
-            if job.spec.render.mode == mode
-        )
-        if varying and mode in limits.VARYING_VALIDATED_FROM_M:
-            floor = limits.VARYING_VALIDATED_FROM_M[mode]
-            below = sorted(v for v in plan.levels if v < floor)
-            if below:
-                print(
-                    f"seahaze: warning: in haze that varies across the sea the {mode} mode is "
-                    f"validated (within 3 % of converged references) down to V = {floor:g} m; "
-                    f"{', '.join(f'{v:g}' for v in below)} m lie below it, where dense patches "
-                    "render too bright (docs/physics.md); --mode reference is unbiased there "
-                    "but slow",
-                    file=sys.stderr,
-                )
-                continue
-        floor = limits.VALIDATED_FROM_M.get(mode)
+        specs = [job.spec for job in plan.jobs if job.spec.render.mode == mode]
+        if mode in limits.UNVALIDATED_WITH_BANK and any(s.haze.bank is not None for s in specs):
+            print(
+                f"seahaze: warning: the {mode} mode is not validated in a fog bank "
+                "(haze.bank): it spreads each ray's haze evenly along it (docs/physics.md); "
+                "--mode reference is unbiased there but slow",
+                file=sys.stderr,
+            )
+            continue
+        varying = any(s.haze.patches is not None for s in specs)
+        floor = (limits.VARYING_VALIDATED_FROM_M if varying else limits.VALIDATED_FROM_M).get(mode)
         below = sorted(v for v in plan.levels if floor is not None and v < floor)
         if below:
+            where = "in patchy haze " if varying else ""
+            why = ", where dense patches render too bright" if varying else ""
             print(
-                f"seahaze: warning: the {mode} mode is validated (within 3 % of converged "
-                f"references) down to V = {floor:g} m; {', '.join(f'{v:g}' for v in below)} m "
-                "lie below it (docs/physics.md); --mode reference is unbiased there but slow",
+                f"seahaze: warning: {where}the {mode} mode is validated (within 3 % of "
+                f"converged references) down to V = {floor:g} m; "
+                f"{', '.join(f'{v:g}' for v in below)} m lie below it{why} (docs/physics.md); "
+                "--mode reference is unbiased there but slow",
                 file=sys.stderr,
             )
 

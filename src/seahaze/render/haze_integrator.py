@@ -102,8 +102,10 @@ class SegmentSun:
     sun_d: Any
     lit: Any
     source: Any
-    depth: Any
-    climb: Any
+    depth: list
+    """Per level, the reduced depth toward the sun at the segment's entry."""
+    climb: list
+    """Per level, how that depth grows per metre of the segment (:meth:`.PassLevels.sun_climb`)."""
 
 
 class HazeIntegrator(mi.SamplingIntegrator):
@@ -231,8 +233,8 @@ class HazeIntegrator(mi.SamplingIntegrator):
         for k in range(self.n_levels):
             # The segment enters the medium where the sun's sample left from (or at the
             # bottom, from below it): the depth toward the sun there is the sample's.
-            frac = levels.sun_scattered(k, sun_att[k], sun_depth, climb, length)
-            beyond = levels.sun_scattered_at(k, sun_depth, climb, s)
+            frac = levels.sun_scattered(k, sun_att[k], sun_depth, climb[k], length)
+            beyond = levels.sun_scattered_at(k, sun_depth, climb[k], s)
             frac -= dr.select(hidden, beyond / dr.maximum(s_pdf, 1e-30), 0.0)
             p.res[k] += dr.select(lit, p.att[k] * weight * frac, 0.0)
 
@@ -263,7 +265,7 @@ class HazeIntegrator(mi.SamplingIntegrator):
         for k in range(self.n_levels):
             # Unshadowed sun: transmittance to the point and on to the sun are both
             # exponential in s, so their product integrates in closed form.
-            frac = levels.sun_scattered(k, None, depth, climb, length)
+            frac = levels.sun_scattered(k, None, depth[k], climb[k], length)
             source = sun * frac * sun_mis + (mass[k] * levels.inv_sg[k] * per_point) * diffuse[k]
             res[k] += dr.select(active, att[k] * beta * source, 0.0)
         return SegmentSun(ray, active, enter, length, beta, sun_d, lit, sun, depth, climb)
@@ -306,7 +308,7 @@ class HazeIntegrator(mi.SamplingIntegrator):
         shaded = along.lit & scene.ray_test(shadow, along.lit)
         scale = along.beta * along.source / dr.maximum(pdf, 1e-30)
         for k in range(self.n_levels):
-            lost = levels.sun_scattered_at(k, along.depth, along.climb, s) * scale
+            lost = levels.sun_scattered_at(k, along.depth[k], along.climb[k], s) * scale
             res[k] -= dr.select(shaded, att[k] * lost, 0.0)
 
     def haze_along(self, sampler, p: HazePath, t_end: Any, n_points: Any):

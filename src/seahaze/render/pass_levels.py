@@ -16,11 +16,12 @@ In haze that varies across the sea a pass renders each pixel's equivalent profil
 (:mod:`seahaze.render.pixel_density`): :meth:`PassLevels.start` gives it, per lane, the
 density ratios of the camera path's pixel, and every answer is the profile's scaled by them.
 Along the camera segment reduced lengths and heights are the profile's times the ``view``
-ratio ``r`` (a reduced distance divided by it to find its point) and depths toward the sun
-times the ``sun_air`` ratio ``r_s``; along the later segments, which leave a surface, and the
-rays from a surface toward the lights, both are times the ``sun_surface`` ratio (the haze
-around the surface). None, as for every other haze, leaves the kernels exactly as they
-were.
+ratio ``r`` (a reduced distance divided by it to find its point) and each level's depths
+toward the sun times its own ``sun_air`` ratio; along the later segments, which leave a
+surface, lengths are times the ``bounce`` ratio and depths toward the sun times
+``sun_surface``, as are the rays from a surface toward the lights. None, as for every other
+haze, leaves the kernels exactly as they were: the per-level depths toward the sun are then
+one value.
 """
 
 from __future__ import annotations
@@ -56,11 +57,13 @@ class PassLevels:
         self.medium, self.n_levels, self.grey = medium, n_levels, grey
         self.ops = drjit_ops()
         self.pixel: Any = None
-        """Per lane, the ``view``, ``sun_air`` and ``sun_surface`` density ratios of the
-        camera path's pixel (drjit Floats), or None: the medium's profile as it is (module
-        docstring). Set by the pass before it traces (:meth:`start`)."""
+        """Per lane, the ``view``, per-level ``sun_air``, ``sun_surface`` and ``bounce``
+        density ratios of the camera path's pixel (drjit Floats), or None: the medium's
+        profile as it is (module docstring). Set by the pass before it traces
+        (:meth:`start`)."""
         self.ratio: Any = None
-        """The ratios of the segment being followed: along it, toward the sun from it."""
+        """The ratios of the segment being followed: along it, and per level toward the sun
+        from it."""
         self.set(
             np.full((n_levels, 3), 1e-3),
             np.full(n_levels, 1.0 / n_levels),
@@ -114,7 +117,8 @@ class PassLevels:
 
     def start(self, pixel: Any) -> None:
         """Point the kernels at a camera path of a pixel with ratios ``pixel`` (``view``,
-        ``sun_air``, ``sun_surface``; None: no scaling), its camera segment first."""
+        the levels' ``sun_air``, ``sun_surface``, ``bounce``; None: no scaling), its camera
+        segment first."""
         self.pixel = pixel
         self.ratio = None if pixel is None else (pixel[0], pixel[1])
 
@@ -122,8 +126,9 @@ class PassLevels:
         """Point the kernels at the path's next segment: the camera's where ``first``, else
         one that leaves a surface (module docstring)."""
         if self.pixel is not None:
-            view, sun_air, surface = self.pixel
-            self.ratio = (dr_select(first, view, surface), dr_select(first, sun_air, surface))
+            view, sun_air, surface, bounce = self.pixel
+            suns = [dr_select(first, sun, surface) for sun in sun_air]
+            self.ratio = (dr_select(first, view, bounce), suns)
 
     # -- where the medium is along a ray ----------------------------------------------------
     def segment(self, p: Any, d: Any, t_end: Any = None) -> tuple[Any, Any]:
@@ -161,23 +166,26 @@ class PassLevels:
             reduced = reduced / self.ratio[0]
         return self.medium.distance_at(ray.o.z, ray.d.z, enter, reduced, self.ops)
 
-    def depth_toward_sun(self, h: Any, mu_sun: Any) -> Any:
-        """The reduced length (m) from reduced height ``h`` out of the medium toward the
-        sun."""
+    def depth_toward_sun(self, h: Any, mu_sun: Any) -> list:
+        """Per level, the reduced length (m) from reduced height ``h`` out of the medium
+        toward the sun (one value for every level but where pixels' equivalent profiles give
+        each level its own sun ratio)."""
         if self.ratio is None:
-            return self.medium.depth_toward_sun(h, mu_sun, self.ops)
-        view, sun = self.ratio
-        return self.medium.depth_toward_sun(h / view, mu_sun, self.ops) * sun
+            return [self.medium.depth_toward_sun(h, mu_sun, self.ops)] * self.n_levels
+        view, suns = self.ratio
+        depth = self.medium.depth_toward_sun(h / view, mu_sun, self.ops)
+        return [depth * sun for sun in suns]
 
-    def sun_climb(self, dz: Any, mu_sun: Any) -> Any:
-        """How a segment's depth toward the sun grows per metre of its reduced length:
-        ``1 − d_z / μ_sun`` (back to the segment's start, less the climb toward the sun),
-        the climb scaled by ``r_s / r`` where the pass renders pixels' equivalent
+    def sun_climb(self, dz: Any, mu_sun: Any) -> list:
+        """Per level, how a segment's depth toward the sun grows per metre of its reduced
+        length: ``1 − d_z / μ_sun`` (back to the segment's start, less the climb toward the
+        sun), the climb scaled by ``r_s / r`` where the pass renders pixels' equivalent
         profiles."""
         if self.ratio is None:
-            return 1.0 - dz / mu_sun
-        view, sun = self.ratio
-        return 1.0 - dz / mu_sun * (sun / view)
+            return [1.0 - dz / mu_sun] * self.n_levels
+        view, suns = self.ratio
+        slope = dz / mu_sun / view
+        return [1.0 - slope * sun for sun in suns]
 
     # -- distances along a segment ----------------------------------------------------------
     def mass(self, k: int, length: Any) -> Any:

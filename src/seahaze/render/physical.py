@@ -37,7 +37,7 @@ from .diffuse_table import DEFAULT_GRID, UNFOLDED_GRID, TableGrid, build_tables
 from .estimator import DEFAULT_SETTINGS, EstimatorSettings
 from .passes import GeometryPass, render_geometry, render_radiance
 from .photon_sources import emitter_photons, sample_sea_reflectance, sea_bsdf
-from .pixel_density import PixelRatio, pixel_ratios
+from .pixel_density import PixelRatio, PixelRatios, pixel_ratios
 from .scene import SEA_SHAPE, LoadedScene, stratified_spp
 from .segment_smooth import segments, smooth_within_segments
 from .sky import sun_and_sky_dicts
@@ -97,6 +97,7 @@ class PhysicalRenderer:
         self.field = loaded.medium if isinstance(loaded.medium, NonUniformHaze) else None
         self.medium = loaded.medium if self.field is None else self.field.profile
         self.pixel_ratio: PixelRatio | None = None
+        self._ratios: dict[tuple, PixelRatios] = {}
         # The sun and the sky as separate emitters: the sun's single scattering is computed
         # per pixel with shadow rays, the sky's goes into the table.
         sun, sky = sun_and_sky_dicts(spec, loaded.elapsed_s)
@@ -175,9 +176,11 @@ class PhysicalRenderer:
             say(f"diffuse tables ({photons:,} photons)")
         tables = self.tables(sigma, albedo, g, seed, photons) if len(sigma) else None
         table_seconds = time.perf_counter() - start
-        if self.field is not None and self.pixel_ratio is None:
+        ratios = None
+        if self.field is not None:
             say("pixel density ratios")
-            self.pixel_ratio = self.pixel_ratios()
+            ratios = self.pixel_ratios(sigma[:, 1] if len(sigma) else np.full(1, 1e-6))
+        sensor = self.loaded.scene.sensors()[0]
         most = self.settings.max_levels_per_pass
         group = levels_per_pass(cam.width, cam.height, len(sigma), most)
         groups = -(-max(len(sigma), 1) // group)
@@ -195,6 +198,8 @@ class PhysicalRenderer:
             if part_tables is None:
                 grid = self.grid
                 part_tables = np.zeros((grid.n_z, grid.n_mu, grid.n_phi, 3), np.float32)
+            if ratios is not None:
+                self.pixel_ratio = PixelRatio(sensor, ratios.levels(slice(first, first + n)))
             camera_pass = self.integrator("camera", part_sigma, albedo, g, part_tables)
             say(f"camera pass{of}, {stratified_spp(spp)} spp")
             image = render_radiance(
@@ -211,14 +216,18 @@ class PhysicalRenderer:
         assert clean is not None
         return PhysicalPass(clean, levels, table_seconds)
 
-    def pixel_ratios(self) -> PixelRatio:
-        """Each pixel's density ratios in the scene's field (:func:`pixel_ratios`), from the
-        geometry pass's pixel-centre rays and the sun's direction, for the kernels."""
+    def pixel_ratios(self, sigma: np.ndarray) -> PixelRatios:
+        """Each pixel's density ratios in the scene's field (:func:`pixel_ratios`) for levels
+        of (green) extinction ``sigma`` (L,) in 1/m, from the geometry pass's pixel-centre rays
+        and the sun's direction; kept for the frame's next render of the same levels."""
         assert self.field is not None
-        if self.geometry is None:
-            self.geometry = render_geometry(self.loaded)
-        ratios = pixel_ratios(self.field, self.geometry, sun_axis(self.sun))
-        return PixelRatio(self.loaded.scene.sensors()[0], ratios)
+        key = tuple(float(x) for x in sigma)
+        if key not in self._ratios:
+            if self.geometry is None:
+                self.geometry = render_geometry(self.loaded)
+            sun = sun_axis(self.sun)
+            self._ratios[key] = pixel_ratios(self.field, self.geometry, sun, np.asarray(key))
+        return self._ratios[key]
 
     def vessel_light(
         self,

@@ -47,15 +47,17 @@ from ..medium import NUMPY, drjit_ops
 from ..nonuniform import RAY_REACH_M, NonUniformHaze
 from .passes import GeometryPass
 
-AIR_REACH_M = 2000.0
-"""How far along a camera ray the points of its ``sun_air`` ratio reach (m): where the sun's
-single scattering of the levels from 1000 m up is gathered (at 300 m the sun's light hardly
-reaches the haze near the sea)."""
-AIR_POINTS = 8
-"""Points along a camera ray (midpoints of equal steps) at which its ``sun_air`` ratio is
-integrated."""
+AIR_REACH_M = 6000.0
+"""How far along a camera ray the points of its ``sun_air`` ratios reach (m): the clearest
+graded level's haze scatters most of its light within it."""
+AIR_POINTS = 24
+"""Points along a camera ray at which its ``sun_air`` ratios are integrated: midpoints of
+cells that grow quadratically with distance (the thickest level's light comes from the first
+tens of metres, the clearest level's from kilometres)."""
+SUN_RATIO_NEWTON_STEPS = 12
+"""Newton steps of a level's ``sun_air`` ratio (quadratic convergence from a close start)."""
 SUN_GRID_PIXELS = 320 * 180
-"""Most pixels whose sun ratios are integrated (every ``n``-th row and column)."""
+"""Most pixels whose sun and bounce ratios are integrated (every ``n``-th row and column)."""
 
 SMALLEST_RATIO = 1e-6
 """The least ratio a kernel reads: a reduced distance is divided by it."""
@@ -65,43 +67,131 @@ SMALLEST_PROFILE_LENGTH_M = 1e-6
 
 @dataclass(frozen=True)
 class PixelRatios:
-    """A frame's per-pixel density ratios (module docstring), each (H, W) float64."""
+    """A frame's per-pixel density ratios (module docstring), float64."""
 
     view: np.ndarray
+    """(H, W)."""
     sun_air: np.ndarray
+    """(L, H, W): one per level."""
     sun_surface: np.ndarray
+    """(H, W)."""
+    bounce: np.ndarray
+    """(H, W)."""
+
+    def levels(self, part: slice) -> PixelRatios:
+        """The ratios of the levels ``part`` of those they were computed for."""
+        return PixelRatios(self.view, self.sun_air[part], self.sun_surface, self.bounce)
 
 
 def pixel_ratios(
-    medium: NonUniformHaze, geometry: GeometryPass, sun_direction: np.ndarray
+    medium: NonUniformHaze,
+    geometry: GeometryPass,
+    sun_direction: np.ndarray,
+    sigma: np.ndarray,
+    sea: np.ndarray | None = None,
 ) -> PixelRatios:
     """The :class:`PixelRatios` of ``geometry``'s pixels in ``medium`` lit from the unit
-    ``sun_direction`` (toward the sun, world frame)."""
+    ``sun_direction`` (toward the sun, world frame), for levels of (green) extinction
+    ``sigma`` (L,) in 1/m; ``sea``: (H, W) the pixels whose surface is the sea (None: every
+    surface pixel that is no vessel, from ``geometry.instance``)."""
     view = pixel_density_ratio(medium, geometry)
+    sigma = np.asarray(sigma, np.float64)
     if sun_direction[2] <= 0.0:  # a sun below the horizon lights no haze: no depth to scale
-        return PixelRatios(view, view, view)
+        return PixelRatios(view, np.stack([view] * len(sigma)), view, view)
     height, width = view.shape
     step = max(1, math.ceil(math.sqrt(height * width / SUN_GRID_PIXELS)))
     rows, cols = np.arange(0, height, step), np.arange(0, width, step)
     dirs = geometry.directions[rows][:, cols].astype(np.float64)
-    dist = np.minimum(geometry.distance_m[rows][:, cols].astype(np.float64), RAY_REACH_M)
+    dist_m = geometry.distance_m[rows][:, cols].astype(np.float64)
+    dist = np.minimum(dist_m, RAY_REACH_M)
     origin = geometry.origin.astype(np.float64)
-    # Along the ray: midpoints of equal steps over its first AIR_REACH_M (or up to its surface).
-    reach = np.minimum(dist, AIR_REACH_M)[..., None]
-    s = (np.arange(AIR_POINTS) + 0.5) / AIR_POINTS * reach
-    air = origin + s[..., None] * dirs[..., None, :]
     surface = origin + dist[..., None] * dirs
+    # Along the ray, up to AIR_REACH_M or its surface: cells growing quadratically.
+    reach = np.minimum(dist, AIR_REACH_M)[..., None]
+    edges = (np.arange(AIR_POINTS + 1) / AIR_POINTS) ** 2
+    s = 0.5 * (edges[:-1] + edges[1:]) * reach
+    width_m = np.diff(edges) * reach
+    air = origin + s[..., None] * dirs[..., None, :]
     points = np.concatenate([air.reshape(-1, 3), surface.reshape(-1, 3)])
     field_depth, profile_depth = sun_depths(medium, points, sun_direction)
     n_air = air.shape[0] * air.shape[1] * AIR_POINTS
-    weight = medium.density_at(air[..., 0], air[..., 1], air[..., 2])
-    field_air = np.sum(weight * field_depth[:n_air].reshape(air.shape[:-1]), axis=-1)
-    profile_air = np.sum(weight * profile_depth[:n_air].reshape(air.shape[:-1]), axis=-1)
-    sun_air = _ratio(field_air, profile_air)
+    shape = air.shape[:-1]
+    rho = medium.density_at(air[..., 0], air[..., 1], air[..., 2])
+    sun_air = np.stack(
+        [
+            _level_sun_ratio(
+                k,
+                rho * width_m,
+                field_depth[:n_air].reshape(shape),
+                profile_depth[:n_air].reshape(shape),
+            )
+            for k in sigma
+        ]
+    )
     sun_surface = _ratio(field_depth[n_air:], profile_depth[n_air:]).reshape(dist.shape)
-    sun_surface = np.where(np.isfinite(geometry.distance_m[rows][:, cols]), sun_surface, sun_air)
-    spread = lambda grid: np.repeat(np.repeat(grid, step, 0), step, 1)[:height, :width]  # noqa: E731
-    return PixelRatios(view, spread(sun_air), spread(sun_surface))
+    sky = ~np.isfinite(dist_m)
+    sun_surface = np.where(sky, view[rows][:, cols], sun_surface)
+    if sea is None:
+        sea = np.isfinite(geometry.distance_m) & (geometry.instance < 0)
+    on_sea = sea[rows][:, cols]
+    bounce = sun_surface.copy()
+    if on_sea.any():
+        bounce[on_sea] = mirror_ratio(medium, surface[on_sea], dirs[on_sea])
+
+    def spread(grid: np.ndarray) -> np.ndarray:
+        return np.repeat(np.repeat(grid, step, -2), step, -1)[..., :height, :width]
+
+    return PixelRatios(view, spread(sun_air), spread(sun_surface), spread(bounce))
+
+
+def _level_sun_ratio(
+    sigma: float, mass: np.ndarray, field_depth: np.ndarray, profile_depth: np.ndarray
+) -> np.ndarray:
+    """One level's ``sun_air`` ratio per ray: the ``r`` for which the profile's depths toward
+    the sun, times ``r``, give the same mean transmittance toward the sun as the field's, the
+    mean over the ray's points weighted by the light each scatters toward the camera
+    (``ρ Δs e^{−σ ℓ}``, ``ℓ`` the reduced length from the camera; ``mass`` = ``ρ Δs``). So a
+    field that is the profile times ``r`` gives ``r``. Solved by Newton's method on the
+    logarithm of the mean (convex and decreasing in ``r``), from the ratio of the mean depths;
+    in logarithms throughout: no underflow at the optical depths of hundreds of a thick
+    level."""
+    travelled = np.cumsum(mass, axis=-1) - 0.5 * mass
+    with np.errstate(divide="ignore"):
+        log_w = np.log(mass) - sigma * travelled
+    target = _logsumexp(log_w - sigma * field_depth)
+    weight = np.exp(log_w - _logsumexp(log_w)[..., None])
+    r = _ratio(np.sum(weight * field_depth, -1), np.sum(weight * profile_depth, -1))
+    for _ in range(SUN_RATIO_NEWTON_STEPS):
+        log_t = log_w - sigma * r[..., None] * profile_depth
+        value = _logsumexp(log_t) - target
+        share = np.exp(log_t - _logsumexp(log_t)[..., None])
+        slope = -sigma * np.sum(share * profile_depth, axis=-1)
+        r = np.where(slope < 0.0, r - value / np.where(slope < 0.0, slope, -1.0), r)
+        r = np.maximum(r, 0.0)
+    return r
+
+
+def _logsumexp(x: np.ndarray) -> np.ndarray:
+    """``ln Σ e^x`` over the last axis, safe for large and ``−∞`` values."""
+    top = np.max(x, axis=-1)
+    top = np.where(np.isfinite(top), top, 0.0)
+    with np.errstate(divide="ignore"):
+        return top + np.log(np.sum(np.exp(x - top[..., None]), axis=-1))
+
+
+def mirror_ratio(medium: NonUniformHaze, points: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+    """``ℓ_field / ℓ_profile`` (N,) of the rays from sea ``points`` (N, 3) along the camera
+    rays ``dirs`` (N, 3) mirrored in a flat sea: where the light the sea reflects toward the
+    camera travels, up to the medium's top or :data:`RAY_REACH_M`."""
+    profile = medium.profile
+    up = dirs * np.array([1.0, 1.0, -1.0])
+    climb = np.maximum(up[:, 2], 1e-9)
+    length = np.minimum(np.maximum(profile.top - points[:, 2], 0.0) / climb, RAY_REACH_M)
+    _, profile_length = profile.reduced_length(points[:, 2], up[:, 2], length, NUMPY)
+    panel = float(np.min(medium.panel_length(up[:, 2])))
+    panels = max(1, math.ceil(float(length.max(initial=0.0)) / panel))
+    field_length = _field_quadrature(medium, points, up, length, panels)
+    return _ratio(field_length, np.asarray(profile_length, np.float64))
 
 
 def _ratio(field: np.ndarray, profile: np.ndarray) -> np.ndarray:
@@ -130,18 +220,20 @@ def sun_depths(
     length = np.maximum(profile.top - points[:, 2], 0.0) / mu
     panel = float(medium.panel_length(np.array([mu]))[0])
     panels = max(1, math.ceil(float(length.max(initial=0.0)) / panel))
-    field_depth = _field_quadrature(medium, points, sun_direction, length, panels)
+    directions = np.broadcast_to(np.asarray(sun_direction, np.float64), points.shape)
+    field_depth = _field_quadrature(medium, points, directions, length, panels)
     return field_depth, profile_depth
 
 
 def _field_quadrature(
     medium: NonUniformHaze,
     points: np.ndarray,
-    direction: np.ndarray,
+    directions: np.ndarray,
     length: np.ndarray,
     panels: int,
 ) -> np.ndarray:
-    """``∫₀^L c ρ_v m ds`` from each point along ``direction`` over its ``length`` (m), in
+    """``∫₀^L c ρ_v m ds`` from each point along its unit direction (``directions``, (N, 3))
+    over its ``length`` (m), in
     ``panels`` equal panels of three Gauss–Legendre nodes, evaluated with drjit (one kernel
     launched per node, its position a kernel parameter)."""
     import drjit as dr
@@ -154,7 +246,7 @@ def _field_quadrature(
     travelled = dr.opaque(mi.Float, drift.speed_m_s * drift.time_s)
     o = [mi.Float(points[:, k].astype(np.float32)) for k in range(3)]
     width = mi.Float((length / panels).astype(np.float32))
-    d = [dr.opaque(mi.Float, float(c)) for c in direction]  # another sun, the same kernel
+    d = [mi.Float(directions[:, k].astype(np.float32)) for k in range(3)]
     total = dr.zeros(mi.Float, len(points))
     for i in range(panels):
         for node, w in zip(GAUSS_NODES, GAUSS_WEIGHTS, strict=True):
@@ -200,17 +292,19 @@ class PixelRatio:
         height, width = ratios.view.shape
         self.sensor = sensor
         # A ratio of 0 (no haze along the ray) would divide a reduced distance by 0.
-        self.ratios = [
-            owned_floats(np.maximum(r, SMALLEST_RATIO))
-            for r in (ratios.view, ratios.sun_air, ratios.sun_surface)
-        ]
+        owned = lambda r: owned_floats(np.maximum(r, SMALLEST_RATIO))  # noqa: E731
+        self.view, self.surface, self.bounce = (
+            owned(r) for r in (ratios.view, ratios.sun_surface, ratios.bounce)
+        )
+        self.sun_air = [owned(r) for r in ratios.sun_air]
         self.width = dr.opaque(mi.UInt32, width)
         self.last_x = dr.opaque(mi.Float, width - 1)
         self.last_y = dr.opaque(mi.Float, height - 1)
 
-    def at(self, ray: Any, active: Any) -> tuple[Any, Any, Any]:
-        """The ``view``, ``sun_air`` and ``sun_surface`` ratios of the pixel camera ray
-        ``ray`` leaves through (a Float per lane each; 1 where inactive)."""
+    def at(self, ray: Any, active: Any) -> tuple[Any, list, Any, Any]:
+        """The ``view`` ratio, the levels' ``sun_air`` ratios, the ``sun_surface`` and the
+        ``bounce`` ratio of the pixel camera ray ``ray`` leaves through (a Float per lane
+        each; 1 where inactive)."""
         import drjit as dr
         import mitsuba as mi
 
@@ -221,7 +315,13 @@ class PixelRatio:
         y = dr.clip(dr.floor(ds.uv.y), 0.0, self.last_y)
         inside = active & dr.isfinite(x) & dr.isfinite(y)
         index = dr.select(inside, mi.UInt32(y) * self.width + mi.UInt32(x), 0)
-        view, sun_air, sun_surface = (
-            dr.select(inside, dr.gather(mi.Float, r, index, inside), 1.0) for r in self.ratios
+
+        def read(array: Any) -> Any:
+            return dr.select(inside, dr.gather(mi.Float, array, index, inside), 1.0)
+
+        return (
+            read(self.view),
+            [read(a) for a in self.sun_air],
+            read(self.surface),
+            read(self.bounce),
         )
-        return view, sun_air, sun_surface
