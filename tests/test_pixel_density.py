@@ -154,3 +154,41 @@ def test_a_field_of_ratio_one_renders_what_the_slab_renders():
     slab = _renderer(SLAB).render([sigma], 0.998, 0.75, 4, 9)
     np.testing.assert_array_equal(field.clean, slab.clean)
     assert abs(field.levels[0].mean() / slab.levels[0].mean() - 1.0) < 0.01
+
+
+def test_a_levels_sun_ratio_gives_the_fields_mean_transmittance_toward_the_sun():
+    """Whatever the depths, the level's ratio makes the profile's depths give the field's
+    mean transmittance toward the sun over the ray's points, weighted by the light each
+    sends to the camera (ρ Δs e^{−σℓ}), also where the transmittances underflow float64."""
+    from seahaze.render.pixel_density import level_sun_ratio
+
+    rng = np.random.default_rng(8)
+    mass = rng.uniform(0.1, 40.0, (50, 24))
+    profile = rng.uniform(100.0, 700.0, (50, 24))
+    field = profile * rng.lognormal(0.0, 0.8, (50, 24))
+    for sigma in (3.912 / 4000, 3.912 / 1000, 3.912 / 300, 0.5):
+        r = level_sun_ratio(sigma, mass, field, profile)
+        travelled = np.cumsum(mass, -1) - 0.5 * mass
+        log_w = np.log(mass) - sigma * travelled
+        want = np.logaddexp.reduce(log_w - sigma * field, axis=-1)
+        got = np.logaddexp.reduce(log_w - sigma * r[:, None] * profile, axis=-1)
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
+        assert np.all(r > 0.0)
+
+
+def test_the_seas_bounce_ratio_is_its_mirrored_rays():
+    from seahaze.render.pixel_density import mirror_ratio
+
+    medium = NonUniformHaze(SLAB, HazeField(PATCHES), 1.1)
+    rng = np.random.default_rng(3)
+    points = np.stack([rng.uniform(-500, 500, 6), rng.uniform(100, 2000, 6), np.zeros(6)], 1)
+    dirs = np.stack([rng.uniform(-0.3, 0.3, 6), np.ones(6), -rng.uniform(0.02, 0.1, 6)], 1)
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    got = mirror_ratio(medium, points, dirs)
+    for k in range(6):
+        up = dirs[k] * np.array([1.0, 1.0, -1.0])
+        length = min(SLAB.top / up[2], RAY_REACH_M)
+        s = np.linspace(0.0, length, 40_001)
+        q = points[k] + s[:, None] * up
+        field = simpson(medium.density_at(q[:, 0], q[:, 1], q[:, 2]), x=s)
+        np.testing.assert_allclose(got[k], field / length, rtol=3e-4)

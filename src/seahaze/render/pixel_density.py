@@ -9,30 +9,35 @@ integrals of the field, :class:`PixelRatios`):
 
 ``view``
     ``ℓ_field / ℓ_profile`` of the pixel-centre ray up to its surface (or :data:`RAY_REACH_M`
-    for the sky): the path's segments (the camera's, and the later ones from the surfaces it
-    meets) are the profile's scaled by it. So the camera segment's transmittance at the
-    pixel's centre is the field's own, ``e^{−σ ℓ}`` exactly (the ``transmission/`` maps), and
-    its in-scattering is the field's wherever the source varies little along the ray:
+    for the sky): the camera segment is the profile's scaled by it. So its transmittance at
+    the pixel's centre is the field's own, ``e^{−σ ℓ}`` exactly (the ``transmission/`` maps),
+    and its in-scattering is the field's wherever the source varies little along the ray:
     ``∫ T σ ρ J ds = J (1 − e^{−σ ℓ})`` for a constant ``J``, wherever the haze lies.
-``sun_air``
-    The haze's depth toward the sun in the field over the profile's, at points along the
-    camera ray (:data:`AIR_POINTS` over its first :data:`AIR_REACH_M`, weighted by the density
-    there): how much a patch above the haze in view shades it from the sun. The sun's depth
-    toward every point a path scatters at is the profile's scaled by it.
+``sun_air`` (one per level)
+    How much the haze above the camera ray shades it from the sun: the ratio ``r`` for which
+    the profile's depths toward the sun times ``r`` give the field's mean transmittance toward
+    the sun over :data:`AIR_POINTS` points of the ray, weighted by the light each scatters
+    toward the camera at that level. The sun's depth toward every point the camera segment
+    scatters at is the profile's scaled by it.
 ``sun_surface``
-    The same ratio at the surface the pixel's ray meets (the sky's: ``sun_air``): the rays
-    from a surface toward the sun and the sky see the column above it, scaled by it.
+    The field's depth toward the sun over the profile's at the surface the pixel's ray meets:
+    the rays from the surface toward the sun and the sky, and the sun's depths along the
+    later segments, are the profile's scaled by it.
+``bounce``
+    The later segments' ratio: on the sea, that of the camera ray mirrored in a flat sea (where
+    the light the sea reflects comes from); on a vessel, ``sun_surface``.
 
-What the scaled profile still misses is where along a ray the haze lies (beyond the sun's
-depth): the heights the diffuse tables are read at, and the later segments, which see the
-pixel's ratios rather than their own. docs/physics.md ("The physical mode in haze that varies
-across the sea") measures what it costs per region against the ``reference`` mode, which
-path-traces the field.
+What the scaled profile still misses is where along a ray the haze lies and how the diffuse
+field answers the haze around each point: the tables are the profile's. docs/physics.md ("Haze
+that varies across the sea in the physical mode") measures what that costs per region against
+the ``reference`` mode, which path-traces the field: dense patches shield their own inside
+(too bright at thick levels), and a bank, which puts a ray's haze beyond its edge, is not
+rendered within 3 % at any level.
 
 Inside a pixel the ratios are the centre ray's: a sample that meets the sky beside a vessel's
 edge uses the vessel's (a pixel's width of silhouette). The sun ratios are integrated on a
-grid of at most :data:`SUN_GRID_PIXELS` pixels and spread to the pixels around each (the
-field's depth toward the sun changes little from one pixel to the next).
+grid of at most :data:`SUN_GRID_PIXELS` pixels and spread to the pixels around each, as are
+the bounce ratios (both change little from one pixel to the next).
 """
 
 from __future__ import annotations
@@ -119,7 +124,7 @@ def pixel_ratios(
     rho = medium.density_at(air[..., 0], air[..., 1], air[..., 2])
     sun_air = np.stack(
         [
-            _level_sun_ratio(
+            level_sun_ratio(
                 k,
                 rho * width_m,
                 field_depth[:n_air].reshape(shape),
@@ -144,7 +149,7 @@ def pixel_ratios(
     return PixelRatios(view, spread(sun_air), spread(sun_surface), spread(bounce))
 
 
-def _level_sun_ratio(
+def level_sun_ratio(
     sigma: float, mass: np.ndarray, field_depth: np.ndarray, profile_depth: np.ndarray
 ) -> np.ndarray:
     """One level's ``sun_air`` ratio per ray: the ``r`` for which the profile's depths toward
