@@ -96,11 +96,11 @@ from 100 m (measured at 100, 200, 300, 1000 and 4000 m). ``reference`` is the un
 at every level; ``asm`` is an approximation that is never within 3 % (5–17 % at 300–4000 m)."""
 
 VARYING_VALIDATED_FROM_M = {"physical": 1000.0}
-"""The same for patches (``haze.patches``), which ``physical`` renders as each pixel's
-equivalent profile: every region within 3.4 % of the ``reference`` at 1000 m and 1 % at 4000 m
-for strong patches (density ratio 30), too bright at 300 m (+7 … +14 %) where dense patches
-shield their own inside (docs/physics.md, "Haze that varies across the sea in the physical
-mode")."""
+"""The same for patches (``haze.patches``), within 3.5 % rather than 3 %: ``physical`` renders
+them as each pixel's equivalent profile, every region within 3.4 % of the ``reference`` at
+1000 m and 1 % at 4000 m for strong patches (density ratio 30), too bright at 300 m
+(+7 … +14 %) where dense patches shield their own inside (docs/physics.md, "Haze that varies
+across the sea in the physical mode")."""
 UNVALIDATED_WITH_BANK = ("physical",)
 """Modes not validated at any level in a fog bank (``haze.bank``): ``physical``'s equivalent
 profile spreads a ray's haze evenly along it, where a bank puts it all beyond the edge (sea

@@ -168,8 +168,9 @@ def _warn_below_validated_range(plan: Any) -> None:
         if below:
             where = "in patchy haze " if varying else ""
             why = ", where dense patches render too bright" if varying else ""
+            within = "3.5 %" if varying else "3 %"
             print(
-                f"seahaze: warning: {where}the {mode} mode is validated (within 3 % of "
+                f"seahaze: warning: {where}the {mode} mode is validated (within {within} of "
                 f"converged references) down to V = {floor:g} m; "
                 f"{', '.join(f'{v:g}' for v in below)} m lie below it{why} (docs/physics.md); "
                 "--mode reference is unbiased there but slow",
