@@ -42,13 +42,6 @@ from . import jit_haze
 from .table_texture import TableTexture
 
 
-def dr_select(condition: Any, a: Any, b: Any) -> Any:
-    """``drjit.select``, imported when a kernel is traced."""
-    import drjit as dr
-
-    return dr.select(condition, a, b)
-
-
 class PassLevels:
     """The levels of one pass (see the module docstring). ``grey`` levels have one
     extinction for R, G and B: their transmittances are one exponential, not three."""
@@ -127,8 +120,8 @@ class PassLevels:
         one that leaves a surface (module docstring)."""
         if self.pixel is not None:
             view, sun_air, surface, bounce = self.pixel
-            suns = [dr_select(first, sun, surface) for sun in sun_air]
-            self.ratio = (dr_select(first, view, bounce), suns)
+            select = self.ops.select
+            self.ratio = (select(first, view, bounce), [select(first, s, surface) for s in sun_air])
 
     # -- where the medium is along a ray ----------------------------------------------------
     def segment(self, p: Any, d: Any, t_end: Any = None) -> tuple[Any, Any]:

@@ -51,6 +51,7 @@ import numpy as np
 from ..medium import NUMPY, drjit_ops
 from ..nonuniform import RAY_REACH_M, NonUniformHaze
 from .passes import GeometryPass
+from .transmission import ray_reach
 
 AIR_REACH_M = 6000.0
 """How far along a camera ray the points of its ``sun_air`` ratios reach (m): the clearest
@@ -272,13 +273,12 @@ def pixel_density_ratio(medium: NonUniformHaze, geometry: GeometryPass) -> np.nd
     """(H, W) float64 ``r = ℓ_field / ℓ_profile`` of every pixel-centre ray of ``geometry``
     (module docstring), up to its surface or :data:`RAY_REACH_M`; 1 where the profile gives
     the ray no haze."""
-    distance = np.minimum(geometry.distance_m.astype(np.float64), RAY_REACH_M)
-    field = medium.ray_path_length(geometry.origin, geometry.directions, distance)
+    # The transmission/ maps' own rays and quadrature (the medium keeps their lengths).
+    reach = ray_reach(geometry, medium)
     dirs_z = geometry.directions[..., 2].astype(np.float64)
     # The profile without the field's normalisation c: c is part of the ratio.
-    profile = medium.profile.path_length(float(geometry.origin[2]), dirs_z, distance)
-    thin = profile < SMALLEST_PROFILE_LENGTH_M
-    return np.where(thin, 1.0, field / np.where(thin, 1.0, profile))
+    profile = medium.profile.path_length(float(geometry.origin[2]), dirs_z, reach.distance_m)
+    return _ratio(reach.reduced_m, profile)
 
 
 class PixelRatio:

@@ -18,7 +18,6 @@ from .field import (
     calibration_medium,
     coverage,
     coverage_note,
-    field_names,
 )
 from .fit import (
     Contrasts,
@@ -87,7 +86,6 @@ __all__ = [
     "calibration_spec",
     "coverage",
     "coverage_note",
-    "field_names",
     "fit_extinction",
     "format_report",
     "horizon_row",

@@ -34,13 +34,6 @@ DENSE_RATIO = 1.15
 """A target whose ray's mean density ``ℓ/d`` exceeds this stands in dense haze (a patch)."""
 THIN_RATIO = 0.87
 """A target whose ray's mean density ``ℓ/d`` is below this stands in thin haze (a gap)."""
-FIELD_FIELDS = ("patches", "bank")
-"""The ``haze`` fields that make the haze vary across the sea."""
-
-
-def field_names(spec: SceneSpec) -> list[str]:
-    """The ``haze.*`` fields of ``spec`` that vary the haze across the sea."""
-    return [f"haze.{name}" for name in FIELD_FIELDS if getattr(spec.haze, name) is not None]
 
 
 def calibration_medium(base: SceneSpec) -> NonUniformHaze | None:
