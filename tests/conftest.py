@@ -279,3 +279,13 @@ render: {spp: 4, seed: 1, write_exr: false}
 """
 """Two vessels whose visibility at 300 m is known: the boat at 150 m is seen, the ship 2 km away
 is not (at 4000 m both are). ``WRITE``: ``true`` or ``false`` for ``labels.write_visible``."""
+
+
+def assert_parts_within_reported_size(model, seed) -> None:
+    """Every part of a built vessel ``model`` lies inside the length, beam (2 cm for fenders
+    and rubbing strakes) and air draft it reports."""
+    for part in model.parts:
+        (x0, y0, _), (x1, y1, z1) = part.mesh.bounds
+        assert -0.5 * model.length_m - 1e-6 <= x0 and x1 <= 0.5 * model.length_m + 1e-6
+        assert max(abs(y0), abs(y1)) <= 0.5 * model.beam_m + 0.02, (seed, part.name)
+        assert z1 <= model.air_draft_m

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from conftest import assert_parts_within_reported_size
 from seahaze.vessels import CLASS_NAMES, VESSEL_CLASSES, build_vessel, class_id
 from seahaze.vessels.model import VesselModel
 from seahaze.world import wind_off_bow
@@ -426,11 +427,7 @@ def test_a_fishing_boats_rust_streaks_lie_on_its_topsides(craft) -> None:
 def test_every_part_lies_inside_the_reported_length_beam_and_air_draft(craft, kind) -> None:
     for seed in CRAFT_SEEDS:
         model = craft[(kind, seed)]
-        for part in model.parts:
-            (x0, y0, _), (x1, y1, z1) = part.mesh.bounds
-            assert -0.5 * model.length_m - 1e-6 <= x0 and x1 <= 0.5 * model.length_m + 1e-6
-            assert max(abs(y0), abs(y1)) <= 0.5 * model.beam_m + 0.02, (seed, part.name)
-            assert z1 <= model.air_draft_m
+        assert_parts_within_reported_size(model, seed)
 
 
 @pytest.mark.parametrize(("kind", "most_faces"), [("tug", 9000), ("fishing_boat", 7000)])

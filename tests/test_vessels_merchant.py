@@ -9,6 +9,7 @@ from itertools import pairwise
 import numpy as np
 import pytest
 
+from conftest import assert_parts_within_reported_size
 from seahaze.vessels import build_vessel
 from seahaze.vessels.bulk_tanker import bulk_holds
 from seahaze.vessels.model import VesselModel
@@ -232,11 +233,7 @@ def test_the_windlasses_stand_on_the_forecastle_inside_its_deck(ships, kind) -> 
 def test_every_part_lies_inside_the_reported_length_beam_and_air_draft(ships, kind) -> None:
     for seed in SEEDS:
         model = ships[(kind, seed)]
-        for part in model.parts:
-            (x0, y0, _), (x1, y1, z1) = part.mesh.bounds
-            assert -0.5 * model.length_m - 1e-6 <= x0 and x1 <= 0.5 * model.length_m + 1e-6
-            assert max(abs(y0), abs(y1)) <= 0.5 * model.beam_m + 0.02, (seed, part.name)
-            assert z1 <= model.air_draft_m
+        assert_parts_within_reported_size(model, seed)
 
 
 # The caller's next draw after each build, as the builders left it before their gear was
