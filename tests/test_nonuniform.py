@@ -115,16 +115,24 @@ def test_a_level_is_the_mean_over_the_views_horizontal_fan():
     assert mean == pytest.approx(1.0, rel=2e-3)
 
 
+@pytest.mark.parametrize("quadrature", ["numpy", "kernel"])
 @pytest.mark.parametrize("profile", ["slab", "fog layer"])
-def test_optical_depths_equal_a_finer_integration(profile):
+def test_optical_depths_equal_a_finer_integration(profile, quadrature, request):
     """Reduced lengths of rays up, down and level (sea, sky, into and out of the bank and a
-    fog layer) against Simpson's rule on a far finer grid, to 1e-4."""
+    fog layer) against Simpson's rule on a far finer grid, to 1e-4: summed by numpy and by
+    the render's drjit kernel (seahaze.render.field_quadrature), on a drifted field."""
     base = (
         HomogeneousSlab(top=300.0, albedo=0.998, g=0.75)
         if profile == "slab"
         else fog_layer_medium(25.0, 3.0, 0.25, 300.0, 40.0)
     )
-    medium = _medium(base)
+    medium = _medium(base, HazeField(PATCHES, BANK, Drift(7.0, 35.0, 12.0)))
+    if quadrature == "kernel":
+        request.getfixturevalue("mitsuba_variant")
+        from seahaze.render.field_quadrature import with_kernel_quadrature
+
+        medium = with_kernel_quadrature(medium)
+        assert medium.quadrature is not None
     origin = np.array([0.0, 0.0, 40.0 if profile == "fog layer" else 12.0])
     rng = np.random.default_rng(4)
     az = np.radians(rng.uniform(-20, 40, 12))

@@ -79,15 +79,16 @@ REFERENCE_CORE_S = {50.0: 9.69e-06, 300.0: 6.56e-06, 4000.0: 3.11e-06}
 ASM_LEVEL_S = {50.0: 1.31, 300.0: 0.91, 4000.0: 0.67}
 
 # measured on this 2-vCPU machine with the path lengths of scenes/patchy.yaml and
-# scenes/fogbank.yaml at 320×180 (4.2e-7 and 4.4e-7 s a point; docs/limits.md); CPU seconds,
-# one core (numpy)
-FIELD_POINT_S = 4.3e-07
+# scenes/fogbank.yaml at 320×180 in the render's drjit kernel (0.16 s for 1.5e7 points and
+# 0.22 s for 6.9e6; docs/limits.md); wall seconds on this machine's one core of throughput
+FIELD_POINT_S = 1.7e-08
 """One evaluation of a varying haze's density (the patches' noise and the bank)."""
 FIELD_RAY_M = 3200.0
 """Mean length (m) of a pixel's ray that the quadrature covers, in horizontal scales."""
-FIELD_BYTES = 0.5 * 2**30
-"""Memory of the quadrature's temporaries (a chunk of points at a time) and its cached path
-lengths (measured: 0.47 GiB at 320×180)."""
+FIELD_BYTES = 0.3 * 2**30
+"""Memory of the quadrature's rays and its cached path lengths (measured: patches 0.25 GiB
+above uniform haze at 1280×720, docs/benchmarks.md, "What the physical mode's equivalent
+profiles cost")."""
 
 VALIDATED_FROM_M = {"physical": 100.0}
 """Thinnest visibility (m) down to which the mode is within 3 % of converged ``reference``

@@ -190,6 +190,8 @@ def open_session(
     """
     timings = {} if timings is None else timings
     variant = select_variant(spec.render.variant)
+    from .field_quadrature import with_kernel_quadrature  # needs the variant
+
     camera = frame_camera(spec, frame)
     with _timed(timings, "geometry_build"):
         geometry = build_geometry(spec, camera, frame) if geometry is None else geometry
@@ -203,7 +205,7 @@ def open_session(
             black_vessels=black_vessels,
             haze_box=spec.render.mode != "physical",
             reach_m=reach_m,
-            medium=medium or scene_haze_medium(spec, camera, frame),
+            medium=with_kernel_quadrature(medium or scene_haze_medium(spec, camera, frame)),
         )
     with _timed(timings, "aov"):
         pixels = passes.render_geometry(loaded)

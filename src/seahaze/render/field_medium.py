@@ -22,7 +22,8 @@ costs null collisions (about ``majorant / σ_t`` per real one), never accuracy.
 Float32 against the float64 truth: positions and lattice coordinates are float32 in the
 kernel (2 mm at 20 km; a lattice coordinate of a few hundred to 1e-5), the hash is the same
 64-bit integer arithmetic; ``tests/test_field_medium.py`` holds the kernel's density to the
-numpy one's within 1e-4.
+numpy one's within 1e-4. The field's functions take their float type from their arguments:
+:mod:`seahaze.render.field_quadrature` evaluates them in float64.
 
 Import this module only once a Mitsuba variant is set.
 """
@@ -55,43 +56,45 @@ PROFILE_SAMPLES = 16385
 
 
 # -- the field in drjit ----------------------------------------------------------------------
-def lattice_value(ix: Any, iy: Any, iz: Any, seed: int) -> Any:
+def lattice_value(ix: Any, iy: Any, iz: Any, seed: Any, float_type: Any) -> Any:
     """:func:`seahaze.haze_field.lattice_value` in the kernel: the same 64-bit hash of the
-    lattice point (``mi.Int64``) and seed, a value in ``[−1, 1]`` (float32)."""
+    lattice point (``mi.Int64``) and seed (an int, or a ``mi.UInt64`` kernel parameter), a
+    value in ``[−1, 1]`` of ``float_type``."""
     mx, my, mz = LATTICE_MULTIPLIERS
     (shift1, mul1), (shift2, mul2), shift3 = SPLITMIX_FINALISER
     h = mi.UInt64(ix) * mx
     h ^= mi.UInt64(iy) * my
     h ^= mi.UInt64(iz) * mz
-    h ^= seed & 0xFFFFFFFFFFFFFFFF
+    h ^= seed & 0xFFFFFFFFFFFFFFFF if isinstance(seed, int) else seed
     h ^= h >> shift1
     h *= mul1
     h ^= h >> shift2
     h *= mul2
     h ^= h >> shift3
-    return mi.Float(mi.Float64(h >> 11) * (2.0 / 2.0**53) - 1.0)
+    return float_type(mi.Float64(h >> 11) * (2.0 / 2.0**53) - 1.0)
 
 
-def value_noise(q: tuple[Any, Any, Any], seed: int) -> Any:
+def value_noise(q: tuple[Any, Any, Any], seed: Any) -> Any:
     """:func:`seahaze.haze_field.value_noise` in the kernel: the lattice values at the eight
-    corners of ``q``'s cell blended with the quintic fade."""
+    corners of ``q``'s cell blended with the quintic fade (in ``q``'s float type)."""
+    float_type = type(q[0])
     base = [dr.floor(c) for c in q]
     fade = [_fade(c - b) for c, b in zip(q, base, strict=True)]
     cells = [mi.Int64(b) for b in base]
-    out = mi.Float(0.0)
+    out = float_type(0.0)
     for corner in range(8):
         offsets = [(corner >> axis) & 1 for axis in range(3)]
-        weight = mi.Float(1.0)
+        weight = float_type(1.0)
         for f, o in zip(fade, offsets, strict=True):
             weight = weight * (f if o else 1.0 - f)
         ix, iy, iz = (c + o for c, o in zip(cells, offsets, strict=True))
-        out = dr.fma(weight, lattice_value(ix, iy, iz, seed), out)
+        out = dr.fma(weight, lattice_value(ix, iy, iz, seed, float_type), out)
     return out
 
 
-def fractal_noise(q: tuple[Any, Any, Any], seed: int) -> Any:
+def fractal_noise(q: tuple[Any, Any, Any], seed: Any) -> Any:
     """:func:`seahaze.haze_field.fractal_noise` in the kernel, in ``[−1, 1]``."""
-    total, weight_sum = mi.Float(0.0), 0.0
+    total, weight_sum = type(q[0])(0.0), 0.0
     for octave in range(OCTAVES):
         scale, weight = 2.0**octave, 0.5**octave
         scaled = tuple(c * scale for c in q)
@@ -100,8 +103,11 @@ def fractal_noise(q: tuple[Any, Any, Any], seed: int) -> Any:
     return total * (1.0 / weight_sum)
 
 
-def patches_modulation(patches: Patches, x: Any, y: Any, z: Any, along: tuple[float, float]):
-    """:meth:`seahaze.haze_field.Patches.modulation` in the kernel."""
+def patches_modulation(
+    patches: Patches, x: Any, y: Any, z: Any, along: tuple[float, float], seed: Any = None
+):
+    """:meth:`seahaze.haze_field.Patches.modulation` in the kernel; ``seed`` (default the
+    patches' own, a literal) may be a ``mi.UInt64`` kernel parameter."""
     ux, uy = along
     u = x * ux + y * uy
     v = y * ux - x * uy
@@ -111,7 +117,7 @@ def patches_modulation(patches: Patches, x: Any, y: Any, z: Any, along: tuple[fl
         z * (1.0 / patches.vertical_m),
     )
     amplitude = 0.5 * math.log(patches.density_ratio)
-    return dr.exp(amplitude * fractal_noise(q, patches.seed))
+    return dr.exp(amplitude * fractal_noise(q, patches.seed if seed is None else seed))
 
 
 def bank_modulation(bank: Bank, x: Any, y: Any) -> Any:
@@ -122,14 +128,16 @@ def bank_modulation(bank: Bank, x: Any, y: Any) -> Any:
     return bank.near_ratio + (1.0 - bank.near_ratio) * step
 
 
-def field_modulation(field: HazeField, p: Any, travelled: Any) -> Any:
-    """``m`` at world points ``p`` (``mi.Point3f``) with the field moved ``travelled`` metres
-    along its drift (a kernel parameter: every frame of a sequence shares the kernel)."""
+def field_modulation(field: HazeField, p: Any, travelled: Any, seed: Any = None) -> Any:
+    """``m`` at world points ``p`` (``mi.Point3f``, or any triple of float arrays with
+    ``.x``, ``.y``, ``.z``) with the field moved ``travelled`` metres along its drift (a
+    kernel parameter: every frame of a sequence shares the kernel); ``seed`` as in
+    :func:`patches_modulation`."""
     ux, uy = field.drift.unit
     x, y = p.x - ux * travelled, p.y - uy * travelled
-    m = mi.Float(1.0)
+    m = type(p.z)(1.0)
     if field.patches is not None:
-        m *= patches_modulation(field.patches, x, y, p.z, field.drift.unit)
+        m *= patches_modulation(field.patches, x, y, p.z, field.drift.unit, seed)
     if field.bank is not None:
         m *= bank_modulation(field.bank, x, y)
     return m

@@ -48,7 +48,7 @@ from typing import Any
 
 import numpy as np
 
-from ..medium import NUMPY, drjit_ops
+from ..medium import NUMPY
 from ..nonuniform import RAY_REACH_M, NonUniformHaze
 from .passes import GeometryPass
 from .transmission import ray_reach
@@ -194,9 +194,7 @@ def mirror_ratio(medium: NonUniformHaze, points: np.ndarray, dirs: np.ndarray) -
     climb = np.maximum(up[:, 2], 1e-9)
     length = np.minimum(np.maximum(profile.top - points[:, 2], 0.0) / climb, RAY_REACH_M)
     _, profile_length = profile.reduced_length(points[:, 2], up[:, 2], length, NUMPY)
-    panel = float(np.min(medium.panel_length(up[:, 2])))
-    panels = max(1, math.ceil(float(length.max(initial=0.0)) / panel))
-    field_length = _field_quadrature(medium, points, up, length, panels)
+    field_length = _field_quadrature(medium, points, up, length)
     return _ratio(field_length, np.asarray(profile_length, np.float64))
 
 
@@ -212,10 +210,8 @@ def sun_depths(
     """The reduced lengths (m) from world ``points`` (N, 3) toward the sun (unit
     ``sun_direction``, above the horizon) up to the medium's top, in the field and in its
     profile alone (each (N,), float64). The profile's in closed form,
-    ``(h(top) − h(z)) / μ_sun``; the field's by composite three-point Gauss–Legendre
-    quadrature in the render kernel's arithmetic (:mod:`seahaze.render.field_medium`'s
-    field), in panels no longer than the field's scales allow
-    (:meth:`NonUniformHaze.panel_length`)."""
+    ``(h(top) − h(z)) / μ_sun``; the field's by the transmission maps' quadrature
+    (:func:`_field_quadrature`)."""
     profile = medium.profile
     mu = float(sun_direction[2])
     if mu <= 0.0:
@@ -224,49 +220,23 @@ def sun_depths(
     reduced_top = profile.reduced_height(np.float64(profile.top), NUMPY)
     profile_depth = (reduced_top - np.asarray(profile.reduced_height(z, NUMPY))) / mu
     length = np.maximum(profile.top - points[:, 2], 0.0) / mu
-    panel = float(medium.panel_length(np.array([mu]))[0])
-    panels = max(1, math.ceil(float(length.max(initial=0.0)) / panel))
     directions = np.broadcast_to(np.asarray(sun_direction, np.float64), points.shape)
-    field_depth = _field_quadrature(medium, points, directions, length, panels)
+    field_depth = _field_quadrature(medium, points, directions, length)
     return field_depth, profile_depth
 
 
 def _field_quadrature(
-    medium: NonUniformHaze,
-    points: np.ndarray,
-    directions: np.ndarray,
-    length: np.ndarray,
-    panels: int,
+    medium: NonUniformHaze, points: np.ndarray, directions: np.ndarray, length: np.ndarray
 ) -> np.ndarray:
     """``∫₀^L c ρ_v m ds`` from each point along its unit direction (``directions``, (N, 3))
-    over its ``length`` (m), in
-    ``panels`` equal panels of three Gauss–Legendre nodes, evaluated with drjit (one kernel
-    launched per node, its position a kernel parameter)."""
-    import drjit as dr
-    import mitsuba as mi
+    over its ``length`` (m): the transmission maps' quadrature and kernel
+    (:meth:`NonUniformHaze.panel_counts`,
+    :func:`seahaze.render.field_quadrature.kernel_path_lengths`)."""
+    from .field_quadrature import kernel_path_lengths
 
-    from ..nonuniform import GAUSS_NODES, GAUSS_WEIGHTS
-    from .field_medium import field_modulation
-
-    drift = medium.field.drift
-    travelled = dr.opaque(mi.Float, drift.speed_m_s * drift.time_s)
-    o = [mi.Float(points[:, k].astype(np.float32)) for k in range(3)]
-    width = mi.Float((length / panels).astype(np.float32))
-    d = [mi.Float(directions[:, k].astype(np.float32)) for k in range(3)]
-    total = dr.zeros(mi.Float, len(points))
-    for i in range(panels):
-        for node, w in zip(GAUSS_NODES, GAUSS_WEIGHTS, strict=True):
-            s = width * dr.opaque(mi.Float, i + 0.5 + 0.5 * node)
-            p = mi.Point3f(*(o[k] + d[k] * s for k in range(3)))
-            vertical = medium.profile.density(p.z, drjit_ops())
-            total += (
-                dr.opaque(mi.Float, 0.5 * w)
-                * width
-                * vertical
-                * field_modulation(medium.field, p, travelled)
-            )
-            dr.eval(total)
-    return medium.scale * np.asarray(total, np.float64)
+    panels = medium.panel_counts(length, directions[:, 2])
+    start = np.zeros(len(points))
+    return kernel_path_lengths(medium, points, directions, start, length, panels)
 
 
 def pixel_density_ratio(medium: NonUniformHaze, geometry: GeometryPass) -> np.ndarray:
