@@ -225,7 +225,8 @@ def scene_core_seconds(spec: SceneSpec) -> tuple[float, float]:
         return serial, parallel + tables
     parallel = pixels * spp * CLEAN_CORE_S
     # Delta tracking samples at the field's bound: patches whose density spans R cost about
-    # sqrt(R) times as many steps (the exact field's majorant; docs/limits.md).
+    # sqrt(R) times as many steps (the exact field's majorant; docs/limits.md), in the
+    # reference's render and in asm's airlight render alike.
     patches = spec.haze.patches
     majorant = math.sqrt(patches.density_ratio) if patches is not None else 1.0
     for v in levels:
@@ -233,7 +234,7 @@ def scene_core_seconds(spec: SceneSpec) -> tuple[float, float]:
             per, fixed = _interpolated(REFERENCE_CORE_S, v) * majorant, 0.0
         else:
             airlight = spec.render.airlight_spp / 1024.0
-            per, fixed = 0.0, _interpolated(ASM_LEVEL_S, v) * airlight
+            per, fixed = 0.0, _interpolated(ASM_LEVEL_S, v) * airlight * majorant
         parallel += fixed + pixels * spp * per
     return serial, parallel
 
