@@ -5,7 +5,10 @@ renderer's, no compression. ``render.camera_model`` (:class:`seahaze.spec.Camera
 gives the PNGs a real camera's, the same way for the clean image and every level, in this order:
 
 1. **Exposure.** The radiance times the scene's exposure (:mod:`seahaze.imaging`): linear
-   display values, 1 at the PNG's white, not clipped.
+   display values, 1 at the PNG's white, not clipped. With ``shutter_s`` a sequence frame is
+   then integrated over its exposure time: each pixel averaged along its image displacement
+   during it, the camera's own motion and the vessels' (:mod:`seahaze.motion_blur`; a global
+   shutter, no rolling-shutter skew).
 2. **Optics** (:func:`blur`), in linear light and before any clip, so a sun glint spreads as
    much light as a lens would spread from it: a point spread function
    ``(1 − h)·G(σ_core) + h·G(σ_halo)``. The core stands for the lens's blur: the best Gaussian
@@ -51,7 +54,7 @@ bit generators' streams, not its distributions'), so the same config and seed gi
 bytes. Sequences: every frame is a scene of its own name, so the noise changes frame to frame
 as a real camera's does.
 
-Not modelled: motion blur, dark current and fixed-pattern noise (PRNU, DSNU), the colour
+Not modelled: a rolling shutter, dark current and fixed-pattern noise (PRNU, DSNU), the colour
 filter array and demosaicing, lens distortion and vignetting, the camera's own tone curve.
 """
 
@@ -66,6 +69,7 @@ import scipy.fft
 from PIL import Image, features
 
 from . import imaging
+from .motion_blur import blur_along_motion
 from .seeds import camera_noise_seed
 from .spec import CameraModelSpec
 
@@ -107,15 +111,18 @@ def has_blur(settings: CameraModelSpec) -> bool:
     return settings.psf_sigma_px > 0.0 or settings.halo_fraction > 0.0
 
 
+def finite_light(linear: np.ndarray) -> np.ndarray:
+    """``linear`` as float64 with NaN as black and values limited to [0, :data:`MAX_LINEAR`]:
+    what the blurs take, since one bad pixel would otherwise spread over the whole image."""
+    values = np.nan_to_num(np.asarray(linear, dtype=np.float64), nan=0.0, posinf=MAX_LINEAR)
+    return np.clip(values, 0.0, MAX_LINEAR, out=values)
+
+
 def blur(linear: np.ndarray, settings: CameraModelSpec) -> np.ndarray:
     """``linear`` (H, W, 3) convolved with the point spread function of ``settings``, mirrored
-    at the frame's edges (module docstring, step 2); float64.
-
-    NaN counts as black and values are limited to [0, :data:`MAX_LINEAR`] first: one bad
-    pixel would otherwise spread over the whole image.
-    """
-    values = np.nan_to_num(np.asarray(linear, dtype=np.float64), nan=0.0, posinf=MAX_LINEAR)
-    np.clip(values, 0.0, MAX_LINEAR, out=values)
+    at the frame's edges (module docstring, step 2); float64, its values
+    :func:`finite_light` first."""
+    values = finite_light(linear)
     if not has_blur(settings):
         return values
     coefficients = scipy.fft.dctn(values, type=2, axes=(0, 1), norm="ortho")
@@ -172,12 +179,17 @@ def capture(
     noise: np.random.SeedSequence,
     dither: np.random.SeedSequence | None = None,
     gains: list[float] | None = None,
+    motion_px: np.ndarray | None = None,
 ) -> np.ndarray:
     """The 8-bit sRGB image (H, W, 3) the camera of ``settings`` makes of ``radiance``: exposed,
-    blurred, read with the sensor noise of seed ``noise``, white-balanced by the channel
-    ``gains`` (None: none), encoded (dithered with ``dither``) and, with ``jpeg_quality``,
-    JPEG-compressed (module docstring, steps 1–6)."""
-    linear = blur(np.asarray(radiance, dtype=np.float64) * float(exposure), settings)
+    blurred by each pixel's displacement ``motion_px`` over the shutter time (None: an
+    instant; :mod:`seahaze.motion_blur`) and by the lens, read with the sensor noise of seed
+    ``noise``, white-balanced by the channel ``gains`` (None: none), encoded (dithered with
+    ``dither``) and, with ``jpeg_quality``, JPEG-compressed (module docstring, steps 1–6)."""
+    exposed = np.asarray(radiance, dtype=np.float64) * float(exposure)
+    if motion_px is not None:
+        exposed = blur_along_motion(finite_light(exposed), motion_px)
+    linear = blur(exposed, settings)
     if settings.full_well_e is not None:
         normals = standard_normals(noise, linear.size)
         linear = sensor_signal(linear, settings.full_well_e, settings.read_noise_e, normals)
@@ -242,14 +254,17 @@ def png_pixels(
     render_meta: Mapping[str, Any],
     scene: str,
     level: str,
+    motion_px: np.ndarray | None = None,
 ) -> np.ndarray:
     """The pixels of the PNG of image ``level`` of ``scene``, as ``meta``'s ``render`` record
-    says: the camera model's (:func:`capture`) when it has one, else
-    :func:`seahaze.imaging.to_srgb8`, dithered either way as the record says."""
+    says: the camera model's (:func:`capture`, with the frame's ``motion_px`` over its
+    shutter time) when it has one, else :func:`seahaze.imaging.to_srgb8`, dithered either way
+    as the record says."""
     dither = imaging.png_dither(render_meta, scene, level)
     settings = settings_from_meta(render_meta)
     if settings is None:
         return imaging.to_srgb8(radiance, exposure, dither)
     record = render_meta["camera_model"]
     noise = camera_noise_seed(int(record["noise_seed"]), scene)
-    return capture(radiance, exposure, settings, noise, dither, record.get("white_balance_gains"))
+    gains = record.get("white_balance_gains")
+    return capture(radiance, exposure, settings, noise, dither, gains, motion_px)

@@ -971,6 +971,16 @@ class CameraModelSpec(_Spec):
         description="JPEG quality (Pillow, 4:2:0 chroma): each PNG holds the decoded JPEG of "
         "its pixels, so the dataset stays PNG. null: no compression.",
     )
+    shutter_s: float = Field(
+        0.0,
+        ge=0.0,
+        le=0.5,
+        description="Exposure time of a global shutter: each frame of a sequence is blurred "
+        "by what moves during it, centred on the frame's time (the camera on its platform, "
+        "the vessels on their courses; seahaze.motion_blur). 0: an instant. A still is "
+        "always an instant (only a sequence moves). 1/60 s = 0.0167.",
+        json_schema_extra=_unit("s"),
+    )
     white_balance: Literal["illuminant", "off"] = Field(
         "illuminant",
         description="`illuminant`: the camera balances its white to the scene's daylight "
@@ -978,6 +988,14 @@ class CameraModelSpec(_Spec):
         "grey, as a camera's daylight or auto setting makes it), so haze lit by a warm sun "
         "is grey in the PNGs; `off`: the renderer's D65 white (the light's own colour).",
     )
+
+    @model_serializer(mode="wrap")
+    def _omit_instant(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # An instant's recorded config and meta stay byte-identical to before the shutter.
+        data = handler(self)
+        if self.shutter_s == 0.0:
+            data.pop("shutter_s", None)
+        return data
 
 
 class RenderSpec(_Spec):

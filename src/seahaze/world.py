@@ -392,16 +392,18 @@ def frame_layout(
     camera: Camera,
     frame: int | None,
     user_models: dict[int, vessels.VesselModel] | None = None,
+    offset_s: float = 0.0,
 ) -> tuple[list[vessels.Placement], list[float]]:
     """The vessels' placements and speeds (m/s) at ``frame`` of the scene's sequence (None:
-    the scene as written, a still); distances from ``camera``'s position, bearings from the
-    scene's ``camera.heading_deg`` (not a rigidly mounted camera's yaw on the swell)."""
+    the scene as written, a still), or ``offset_s`` seconds after it (a shutter's opening and
+    closing); distances from ``camera``'s position, bearings from the scene's
+    ``camera.heading_deg`` (not a rigidly mounted camera's yaw on the swell)."""
     camera = replace(camera, heading_deg=spec.camera.heading_deg)
     placements = layout_vessels(spec, camera, user_models)
     speeds = vessel_speeds(spec, placements)
     if frame is None or spec.sequence is None:
         return placements, speeds
-    t = spec.sequence.time_s(frame)
+    t = spec.sequence.time_s(frame) + offset_s
     courses = motion.plan_courses(spec, placements, speeds)
     xy = (camera.x_m, camera.y_m)
     return [c.placement_at(t, camera.heading_deg, xy) for c in courses], [
@@ -409,8 +411,9 @@ def frame_layout(
     ]
 
 
-def frame_camera(spec: SceneSpec, frame: int | None = None) -> Camera:
-    """The camera at ``frame`` of the scene's sequence (None: the scene's camera).
+def frame_camera(spec: SceneSpec, frame: int | None = None, offset_s: float = 0.0) -> Camera:
+    """The camera at ``frame`` of the scene's sequence (None: the scene's camera), or
+    ``offset_s`` seconds after it.
 
     On a ``ship`` platform the camera sails with the own ship (:func:`seahaze.motion.own_course`)
     and rides its heave and pitch: the own ship floats on the surface at the frame's time, its
@@ -426,7 +429,7 @@ def frame_camera(spec: SceneSpec, frame: int | None = None) -> Camera:
     own = motion.own_course(spec)
     if frame is None or spec.sequence is None or own is None:
         return camera
-    t = spec.sequence.time_s(frame)
+    t = spec.sequence.time_s(frame) + offset_s
     x, y, heading = own.pose(t)
     surface = ocean.make_surface(ocean_params(spec, t))
     length = own.placement.length_m

@@ -58,7 +58,9 @@ def _write_image(
     """The PNG of ``shown`` (denoised when denoising is on) and the EXR of the rendered,
     undenoised ``radiance``."""
     render = scene.meta.get("render", {})
-    image8 = camera_model.png_pixels(shown, scene.exposure, render, scene.name, level)
+    image8 = camera_model.png_pixels(
+        shown, scene.exposure, render, scene.name, level, scene.motion_px
+    )
     fileio.write_png(layout.image(level, scene.name), image8)
     if scene.write_exr:
         fileio.write_rgb_exr(layout.exr(level, scene.name), radiance)

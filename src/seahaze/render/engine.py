@@ -21,6 +21,7 @@ import numpy as np
 from .. import annotate, imaging, labels, motion, visible
 from ..camera import Camera
 from ..medium import HazeMedium
+from ..motion_blur import motion_meta, shutter_displacement
 from ..scene_medium import scene_haze_medium
 from ..seeds import RenderPass, render_seed
 from ..spec import SceneSpec
@@ -103,6 +104,9 @@ class SceneRender:
     visible_labels: dict[str, str] | None = None
     """Level name (clean first) → the YOLO label file of the vessels seen in its image
     (``labels.write_visible``, :mod:`seahaze.visible`), else None."""
+    motion_px: np.ndarray | None = None
+    """(H, W, 2) each pixel's displacement over the camera model's shutter time, which the
+    PNGs are blurred along (:mod:`seahaze.motion_blur`); None for an instant."""
 
     @property
     def clean_image(self) -> np.ndarray:
@@ -256,6 +260,11 @@ def render_scene(
     scene = _assemble(session, name, clean, rendered, timings, clean_denoised)
     if frame is not None and spec.sequence is not None:
         scene.meta = sequence_meta(scene.meta, session.geometry, spec, frame, session.camera)
+        # The camera model's shutter: what moved during the frame's exposure.
+        scene.motion_px = shutter_displacement(spec, frame, scene.geometry)
+        if scene.motion_px is not None:
+            model = scene.meta["render"]["camera_model"]
+            model["motion_blur"] = motion_meta(scene.motion_px)
     return scene
 
 
