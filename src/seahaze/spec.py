@@ -360,7 +360,8 @@ class SeaSpec(_Spec):
     whitecaps: bool = Field(
         True,
         description="Whitecaps on the breaking crests, covering the fraction of the sea the "
-        "wind's coverage law gives (3.9 % at 15 m/s; none on a `flat` sea).",
+        "wind's coverage law gives (3.9 % at 15 m/s; none on a `flat` sea), and from force 7 "
+        "(13.9 m/s) the foam streaks the wind draws along its direction (seahaze.ocean.streaks).",
     )
 
 

@@ -35,7 +35,9 @@ from ..camera import Camera
 from ..haze import Extinction, extinction_rgb, haze_box_half_width
 from ..medium import HazeMedium
 from ..ocean import FOAM_REFLECTANCE
+from ..ocean.streaks import STREAK_REFLECTANCE, FoamStreaks, with_streaks
 from ..scene_medium import haze_medium
+from ..seeds import Stream, stream_seed
 from ..spec import SceneSpec
 from ..visibility import channel_extinction
 from ..world import (
@@ -44,6 +46,7 @@ from ..world import (
     SEA_NEAR_ROUGHNESS,
     MeshData,
     SceneGeometry,
+    wind_speed,
 )
 from .fleet import VesselMaterial, bind_paint, fleet_meshes, vessel_materials, vessel_spheres
 from .mesh_textures import vertex_textures
@@ -186,15 +189,32 @@ def sea_surface_bsdf(spec: SceneSpec, geometry: SceneGeometry) -> dict:
             "bsdf_0": water,
             "bsdf_1": water_bsdf_dict(spec, near),
         }
-    if SEA_FOAM not in weights:
+    if SEA_FOAM in weights:
+        foam = {"type": "diffuse", "reflectance": weights[SEA_FOAM_REFLECTANCE]}
+        water = {"type": "blendbsdf", "weight": weights[SEA_FOAM], "bsdf_0": water, "bsdf_1": foam}
+    streaks = sea_streaks(spec)
+    if streaks is None:
         return water
-    foam = {"type": "diffuse", "reflectance": weights[SEA_FOAM_REFLECTANCE]}
+    # A gale's foam streaks over the water and its whitecaps, read at every shading point.
+    from .streak_texture import streak_texture
+
     return {
         "type": "blendbsdf",
-        "weight": weights[SEA_FOAM],
+        "weight": streak_texture(streaks),
         "bsdf_0": water,
-        "bsdf_1": foam,
+        "bsdf_1": {"type": "diffuse", "reflectance": STREAK_REFLECTANCE},
     }
+
+
+def sea_streaks(spec: SceneSpec) -> FoamStreaks | None:
+    """The scene's foam streaks (:mod:`seahaze.ocean.streaks`): from force 7 on a sea with
+    waves and whitecaps, along the waves' direction, seeded as its waves are; else None."""
+    sea = spec.sea
+    if sea.model == "flat" or not sea.whitecaps:
+        return None
+    seed = stream_seed(spec.render.seed, Stream.SEA, sea.seed)
+    streaks = FoamStreaks(wind_speed(spec), sea.direction_deg, seed)
+    return streaks if streaks.present else None
 
 
 def stratified_spp(spp: int) -> int:
@@ -438,6 +458,10 @@ def build_scene(
             shape_ids[key], vessel_faces[key] = VESSEL_SHAPE, faces_of[sid]
         else:
             shape_ids[key] = -2 if sid == HAZE_BOX_ID else SEA_SHAPE
+    # The plane model of the sea (the physical mode's tables) takes the streaks' mean too.
+    foam = with_streaks(
+        geometry.sea_foam_coverage, geometry.sea_foam_reflectance, sea_streaks(spec)
+    )
     return LoadedScene(
         loaded,
         params,
@@ -450,8 +474,8 @@ def build_scene(
         n_vessels=len(geometry.vessels),
         vessel_spheres=vessel_spheres(fleet, len(geometry.vessels)),
         sea_roughness=geometry.sea_roughness,
-        sea_foam_coverage=geometry.sea_foam_coverage,
-        sea_foam_reflectance=geometry.sea_foam_reflectance,
+        sea_foam_coverage=foam[0],
+        sea_foam_reflectance=foam[1],
         elapsed_s=geometry.elapsed_s,
         clean_scene=clean_scene,
         vessel_materials=materials,

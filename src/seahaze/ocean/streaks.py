@@ -1,0 +1,194 @@
+"""Wind-blown foam streaks: the lines of foam a gale draws along the wind (Beaufort 7 and up).
+
+From force 7 the sea's descriptions change character: "foam from breaking waves begins to be
+blown in streaks along the direction of the wind" (7), "foam is blown in well-marked streaks
+along the direction of the wind" (8), "dense streaks of foam" (9) (WMO-No. 558, *Manual on
+Marine Meteorological Services*, Beaufort scale; the Met Office's sea criteria). The streaks
+are the whitecaps' foam gathered into windrows: long lines parallel to the wind, a few metres
+to tens of metres apart, into which the surface convergence of wind-driven Langmuir
+circulation sweeps floating foam (Langmuir 1938, *Science* 87, 119–123; Leibovich 1983, "The
+form and dynamics of Langmuir circulations", *Annu. Rev. Fluid Mech.* 15, 391–427: windrows
+within about 15° of the wind, spaced from metres to hundreds of metres, the smallest
+shortest-lived). :mod:`seahaze.ocean.whitecaps` puts the whitecaps on the breaking crests;
+this module is the streaks between them, a fraction ``s(x, y)`` (0–1) of the surface at each
+point covered by streak foam.
+
+The pattern (world frame, metres; ``u`` along the wind, ``v`` across it)
+    Across the wind the sea is cut into cells of :data:`SPACING_M`; each cell ``k`` holds one
+    line, jittered within it, of its own width (:data:`WIDTH_M` times 0.5–1.5), with a
+    Gaussian cross-profile ``exp(−((v − c_k)/w_k)²)``. The lines meander: ``v`` is shifted by
+    :data:`MEANDER_M` times 1-D value noise in ``u`` over :data:`MEANDER_LENGTH_M`. Along the
+    wind each line is broken into streaks: it is present where its own 1-D value noise over
+    :data:`SEGMENT_LENGTH_M` is positive (half its length, by the noise's symmetry), faded in
+    and out over :data:`SEGMENT_FADE` of the noise's range. Each line has its own foam density
+    (:data:`BRIGHTNESS`), and floating foam is flecked and holed, not a smooth band: the streak
+    is multiplied by ``(1 + n)/2``, ``n`` 2-D value noise stretched along the wind
+    (:data:`LACE_M`). A share of the lines, drawn per line from the seed, is present at all:
+    :func:`line_share`, which sets the coverage. The noise is the lattice hash of
+    :mod:`seahaze.haze_field` (the same everywhere, in any order).
+
+Coverage
+    The streaks' mean coverage is ``C = line_share · ½ · √π·w̄/S · 0.7 · ½`` (``w̄`` the mean
+    width, ``S`` the spacing, lines far narrower than their spacing; half of each line present,
+    the lines' mean density 0.7, the lace's mean ½). It is 0 below force 7's lower wind,
+    :data:`ONSET_M_S`, and grows linearly to the whitecap law's ``W`` at force 8's,
+    :data:`FULL_M_S`, then follows ``W`` up to the pattern's most (every line present,
+    :data:`MOST_COVERAGE`): streak foam as much as the whitecaps' own. The shares are a visual
+    choice, not a measurement: the Beaufort criteria name the streaks but give no area, and
+    photographic whitecap coverage counts the bright young foam, not the streaks (Callaghan,
+    de Leeuw, Cohen & O'Dowd 2008, *Geophys. Res. Lett.* 35, L23609, separate the two stages).
+    The streaks' foam is aged foam: its reflectance is Koepke's effective whitecap reflectance,
+    :data:`~seahaze.ocean.whitecaps.FOAM_REFLECTANCE` (0.22), fresh foam having faded.
+
+The render reads ``s`` at every shading point (:mod:`seahaze.render.streak_texture`, the
+same formulas in drjit), not per mesh vertex: the sea mesh's vertices, 0.3–1 m apart near the
+camera and coarser beyond, blur lines a few decimetres wide into bands (docs/ocean.md).
+
+Limits: the streaks do not drift or age within a sequence (they are fixed to the sea's
+surface frame), do not follow the wave orbital motion, and their spacing does not grow with
+the mixed layer's depth or the wind's duration.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..haze_field import lattice_value, value_noise
+from .whitecaps import FOAM_REFLECTANCE, whitecap_coverage
+
+ONSET_M_S = 13.9
+"""Wind (m/s at 10 m) at which streaks begin: force 7's lower limit."""
+FULL_M_S = 17.2
+"""Wind at which the streaks' coverage reaches the whitecaps' ``W``: force 8's lower limit."""
+SPACING_M = 6.0
+"""Distance between neighbouring lines across the wind (m)."""
+WIDTH_M = 0.9
+"""Mean width scale ``w̄`` of a line's Gaussian cross-profile (m)."""
+LACE_M = (2.5, 0.4)
+"""Lattice steps (m) along and across the wind of the noise that breaks a streak into the
+flecks and gaps of floating foam."""
+BRIGHTNESS = (0.4, 0.6)
+"""A line's foam density: ``a + b·h`` for its hashed ``h`` in [0, 1) (mean 0.7)."""
+MEANDER_M = 1.5
+"""Amplitude of the lines' sideways wander (m)."""
+MEANDER_LENGTH_M = 40.0
+"""Length along the wind over which a line wanders (m: the lattice step of its noise)."""
+SEGMENT_LENGTH_M = 25.0
+"""Length along the wind of the noise that breaks a line into streaks (m)."""
+SEGMENT_FADE = 0.3
+"""Range of the segment noise over which a streak fades in and out."""
+JITTER = 0.6
+"""How far a line may sit from its cell's centre, as a share of the spacing (±half)."""
+STREAK_REFLECTANCE = FOAM_REFLECTANCE
+"""Visible reflectance of streak foam (Lambertian): Koepke's effective whitecap reflectance."""
+SEED_SALT = 0x5EA5F0A4
+"""Added to the sea's seed: the streaks' noise is unrelated to any other of the scene."""
+
+LINE_COVERAGE = (
+    math.sqrt(math.pi) * WIDTH_M / SPACING_M * (BRIGHTNESS[0] + 0.5 * BRIGHTNESS[1]) * 0.5
+)
+"""Mean coverage of full lines, every one present and unbroken: ``√π w̄ / S`` (the widths'
+factor 0.5–1.5 averages 1) times the lines' mean density and the lace's mean, ½ (the noise is
+symmetric about 0)."""
+MOST_COVERAGE = 0.5 * LINE_COVERAGE
+"""The pattern's most coverage: every line present, each broken into streaks over half its
+length."""
+
+
+def streak_coverage(wind_speed: float) -> float:
+    """The streaks' mean coverage (fraction, 0–1) at wind ``U10`` (m/s; module docstring)."""
+    if wind_speed <= ONSET_M_S:
+        return 0.0
+    ramp = min(1.0, (wind_speed - ONSET_M_S) / (FULL_M_S - ONSET_M_S))
+    return min(ramp * whitecap_coverage(wind_speed), MOST_COVERAGE)
+
+
+def line_share(wind_speed: float) -> float:
+    """The share of lines present at wind ``U10``, which gives :func:`streak_coverage`."""
+    return streak_coverage(wind_speed) / MOST_COVERAGE
+
+
+@dataclass(frozen=True)
+class FoamStreaks:
+    """The streaks of a wind (module docstring): ``wind_speed`` (m/s at 10 m), blowing toward
+    ``toward_deg`` (the waves' direction, counter-clockwise from +x), seeded by ``seed``."""
+
+    wind_speed: float
+    toward_deg: float
+    seed: int
+
+    @property
+    def present(self) -> bool:
+        """Whether the wind draws any streaks."""
+        return line_share(self.wind_speed) > 0.0
+
+    @property
+    def coverage(self) -> float:
+        return streak_coverage(self.wind_speed)
+
+    @property
+    def noise_seed(self) -> int:
+        return (self.seed + SEED_SALT) & 0xFFFFFFFFFFFFFFFF
+
+    def fraction(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """``s``: the fraction of the surface at world points ``(x, y)`` (m) covered by streak
+        foam, float64 in [0, 1]."""
+        az = math.radians(self.toward_deg)
+        x, y = np.asarray(x, np.float64), np.asarray(y, np.float64)
+        u = x * math.cos(az) + y * math.sin(az)
+        v = -x * math.sin(az) + y * math.cos(az)
+        seed = self.noise_seed
+        v = v + MEANDER_M * noise_1d(u / MEANDER_LENGTH_M, np.zeros_like(u), seed)
+        share = line_share(self.wind_speed)
+        cell = np.floor(v / SPACING_M)
+        total = np.zeros_like(u)
+        for offset in (-1.0, 0.0, 1.0):  # a jittered line may reach into a neighbour's cell
+            k = cell + offset
+            centre = (k + 0.5 + JITTER * (hash_01(k, 1, seed) - 0.5)) * SPACING_M
+            width = WIDTH_M * (0.5 + hash_01(k, 2, seed))
+            profile = np.exp(-(((v - centre) / width) ** 2))
+            segment = noise_1d(u / SEGMENT_LENGTH_M, k, seed + 1)
+            along = np.clip(segment / SEGMENT_FADE + 0.5, 0.0, 1.0)
+            present = hash_01(k, 3, seed) < share
+            density = BRIGHTNESS[0] + BRIGHTNESS[1] * hash_01(k, 4, seed)
+            total = np.maximum(total, np.where(present, density * profile * along, 0.0))
+        lace = value_noise(u / LACE_M[0], v / LACE_M[1], np.zeros_like(u), seed + 2)
+        return total * 0.5 * (1.0 + lace)
+
+
+def hash_01(k: np.ndarray, channel: int, seed: int) -> np.ndarray:
+    """A value in [0, 1) per integer line ``k`` and ``channel``: the lattice hash of
+    :func:`seahaze.haze_field.lattice_value` at ``(k, channel, 0)``, mapped from [−1, 1]."""
+    k = np.asarray(k, np.float64).astype(np.int64)
+    return 0.5 * (lattice_value(k, np.full_like(k, channel), np.zeros_like(k), seed) + 1.0)
+
+
+def noise_1d(t: np.ndarray, k: np.ndarray, seed: int) -> np.ndarray:
+    """1-D value noise in [−1, 1] along ``t`` (lattice steps), one independent curve per
+    integer ``k``: hashed lattice values blended with the quintic fade."""
+    t = np.asarray(t, np.float64)
+    base = np.floor(t)
+    f = t - base
+    fade = f * f * f * (f * (f * 6.0 - 15.0) + 10.0)
+    i = base.astype(np.int64)
+    line = np.broadcast_to(np.asarray(k, np.float64), t.shape).astype(np.int64)
+    zero = np.zeros_like(i)
+    a = lattice_value(i, line, zero, seed)
+    b = lattice_value(i + 1, line, zero, seed)
+    return a + fade * (b - a)
+
+
+def with_streaks(
+    coverage: float, reflectance: float, streaks: FoamStreaks | None
+) -> tuple[float, float]:
+    """The sea's mean foam ``coverage`` (0–1) and its mean ``reflectance`` with ``streaks``
+    laid over it (None: as they are): the streaks cover their share of what the whitecaps
+    leave, ``F + (1 − F)·C``, and the mean reflectance is the area-weighted one."""
+    if streaks is None or not streaks.present:
+        return coverage, reflectance
+    added = (1.0 - coverage) * streaks.coverage
+    total = coverage + added
+    return total, (coverage * reflectance + added * STREAK_REFLECTANCE) / total
