@@ -78,7 +78,8 @@ Far field
     :attr:`FoamField.mean_reflectance` (0.185).
 
 Limits: no foam memory (a patch of foam does not drift or decay after the crest has passed),
-no spray or streaks, coverage from the wind alone (not from the generated wave steepness).
+no spray (the wind's streaks are :mod:`seahaze.ocean.streaks`), coverage from the wind alone
+(not from the generated wave steepness).
 """
 
 from __future__ import annotations
