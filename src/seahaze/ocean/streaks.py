@@ -14,7 +14,7 @@ this module is the streaks between them, a fraction ``s(x, y)`` (0–1) of the s
 point covered by streak foam.
 
 The pattern (world frame, metres; ``u`` along the wind, ``v`` across it)
-    Across the wind the sea is cut into cells of :data:`SPACING_M`; each cell ``k`` holds one
+    Across the wind the sea is cut into cells of :data:`SPACING_M`; each cell ``k`` may hold one
     line, jittered within it, of its own width (:data:`WIDTH_M` times 0.5–1.5), with a
     Gaussian cross-profile ``exp(−((v − c_k)/w_k)²)``. The lines meander: ``v`` is shifted by
     :data:`MEANDER_M` times 1-D value noise in ``u`` over :data:`MEANDER_LENGTH_M`. Along the
@@ -32,8 +32,8 @@ Coverage
     width, ``S`` the spacing, lines far narrower than their spacing; half of each line present,
     the lines' mean density 0.7, the lace's mean ½). It is 0 below force 7's lower wind,
     :data:`ONSET_M_S`, and grows linearly to the whitecap law's ``W`` at force 8's,
-    :data:`FULL_M_S`, then follows ``W`` up to the pattern's most (every line present,
-    :data:`MOST_COVERAGE`): streak foam as much as the whitecaps' own. The shares are a visual
+    :data:`FULL_M_S`, then follows ``W`` up to the pattern's most (:data:`MAX_LINE_SHARE` of
+    the lines present, :data:`MOST_COVERAGE`): streak foam as much as the whitecaps' own. The shares are a visual
     choice, not a measurement: the Beaufort criteria name the streaks but give no area, and
     photographic whitecap coverage counts the bright young foam, not the streaks (Callaghan,
     de Leeuw, Cohen & O'Dowd 2008, *Geophys. Res. Lett.* 35, L23609, separate the two stages).
@@ -63,10 +63,13 @@ ONSET_M_S = 13.9
 """Wind (m/s at 10 m) at which streaks begin: force 7's lower limit."""
 FULL_M_S = 17.2
 """Wind at which the streaks' coverage reaches the whitecaps' ``W``: force 8's lower limit."""
-SPACING_M = 6.0
-"""Distance between neighbouring lines across the wind (m)."""
-WIDTH_M = 0.9
+SPACING_M = 5.0
+"""Distance between neighbouring cells across the wind, each holding at most one line (m)."""
+WIDTH_M = 1.2
 """Mean width scale ``w̄`` of a line's Gaussian cross-profile (m)."""
+MAX_LINE_SHARE = 0.6
+"""The largest share of the cells that hold a line: so many missing keep the lines' spacing
+irregular (1 to several cells) at the strongest winds."""
 LACE_M = (2.5, 0.4)
 """Lattice steps (m) along and across the wind of the noise that breaks a streak into the
 flecks and gaps of floating foam."""
@@ -93,9 +96,9 @@ LINE_COVERAGE = (
 """Mean coverage of full lines, every one present and unbroken: ``√π w̄ / S`` (the widths'
 factor 0.5–1.5 averages 1) times the lines' mean density and the lace's mean, ½ (the noise is
 symmetric about 0)."""
-MOST_COVERAGE = 0.5 * LINE_COVERAGE
-"""The pattern's most coverage: every line present, each broken into streaks over half its
-length."""
+MOST_COVERAGE = 0.5 * LINE_COVERAGE * MAX_LINE_SHARE
+"""The pattern's most coverage: :data:`MAX_LINE_SHARE` of the lines present, each broken into
+streaks over half its length."""
 
 
 def streak_coverage(wind_speed: float) -> float:
@@ -108,7 +111,7 @@ def streak_coverage(wind_speed: float) -> float:
 
 def line_share(wind_speed: float) -> float:
     """The share of lines present at wind ``U10``, which gives :func:`streak_coverage`."""
-    return streak_coverage(wind_speed) / MOST_COVERAGE
+    return streak_coverage(wind_speed) / (0.5 * LINE_COVERAGE)
 
 
 @dataclass(frozen=True)
