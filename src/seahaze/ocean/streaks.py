@@ -29,12 +29,13 @@ The pattern (world frame, metres; ``u`` along the wind, ``v`` across it)
 
 Coverage
     The streaks' mean coverage is ``C = line_share · ½ · √π·w̄/S · 0.7 · ½`` (``w̄`` the mean
-    width, ``S`` the spacing, lines far narrower than their spacing; half of each line present,
-    the lines' mean density 0.7, the lace's mean ½). It is 0 below force 7's lower wind,
+    width, ``S`` the cells' spacing, the share of cells holding a line; half of each line
+    present, the lines' mean density 0.7, the lace's mean ½; neighbours rarely overlap, which
+    the quadrature of ``tests/test_streaks.py`` bounds). It is 0 below force 7's lower wind,
     :data:`ONSET_M_S`, and grows linearly to the whitecap law's ``W`` at force 8's,
     :data:`FULL_M_S`, then follows ``W`` up to the pattern's most (:data:`MAX_LINE_SHARE` of
-    the lines present, :data:`MOST_COVERAGE`): streak foam as much as the whitecaps' own. The shares are a visual
-    choice, not a measurement: the Beaufort criteria name the streaks but give no area, and
+    the cells holding a line, :data:`MOST_COVERAGE`): streak foam as much as the whitecaps'
+    own. The shares are a visual choice, not a measurement: the Beaufort criteria name the streaks but give no area, and
     photographic whitecap coverage counts the bright young foam, not the streaks (Callaghan,
     de Leeuw, Cohen & O'Dowd 2008, *Geophys. Res. Lett.* 35, L23609, separate the two stages).
     The streaks' foam is aged foam: its reflectance is Koepke's effective whitecap reflectance,
