@@ -35,9 +35,10 @@ Coverage
     :data:`ONSET_M_S`, and grows linearly to the whitecap law's ``W`` at force 8's,
     :data:`FULL_M_S`, then follows ``W`` up to the pattern's most (:data:`MAX_LINE_SHARE` of
     the cells holding a line, :data:`MOST_COVERAGE`): streak foam as much as the whitecaps'
-    own. The shares are a visual choice, not a measurement: the Beaufort criteria name the streaks but give no area, and
-    photographic whitecap coverage counts the bright young foam, not the streaks (Callaghan,
-    de Leeuw, Cohen & O'Dowd 2008, *Geophys. Res. Lett.* 35, L23609, separate the two stages).
+    own. The shares are a visual choice, not a measurement: the Beaufort criteria name the
+    streaks but give no area, and photographic whitecap coverage counts the bright young foam,
+    not the streaks (Callaghan, de Leeuw, Cohen & O'Dowd 2008, *Geophys. Res. Lett.* 35,
+    L23609, separate the two stages).
     The streaks' foam is aged foam: its reflectance is Koepke's effective whitecap reflectance,
     :data:`~seahaze.ocean.whitecaps.FOAM_REFLECTANCE` (0.22), fresh foam having faded.
 
