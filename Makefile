@@ -1,7 +1,7 @@
 # The two commands of the README. Both install what is missing first (scripts/bootstrap.sh).
 #   make render   render scenes/default.yaml clean + 11 visibility levels into out/default
 #   make test     run the test suite (two pytest-xdist workers: most of its time is LLVM compiling
-#                 kernels on one thread, so a second worker overlaps it; 489 s for 2522 tests
+#                 kernels on one thread, so a second worker overlaps it; 515 s for 2558 tests
 #                 from a fresh clone with an empty kernel cache on a 2-vCPU machine:
 #                 scripts/bench_suite.py)
 VENV  := .venv
