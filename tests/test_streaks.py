@@ -79,6 +79,17 @@ def test_streaks_run_along_the_wind():
     assert change(across, 1.0) > 3.0 * change(along, 1.0)
 
 
+def test_streaks_drift_downwind_with_the_surface_current():
+    # Wu (1983): the wind-driven surface drift is about 3 % of U10; 12.5 s at 16 m/s is 6 m.
+    still, later = FoamStreaks(16.0, 120.0, 8), FoamStreaks(16.0, 120.0, 8, time_s=12.5)
+    az = math.radians(120.0)
+    rng = np.random.default_rng(9)
+    x, y = rng.uniform(-300.0, 300.0, (2, 5000))
+    moved = later.fraction(x + 6.0 * math.cos(az), y + 6.0 * math.sin(az))
+    assert np.allclose(moved, still.fraction(x, y), atol=1e-9)
+    assert not np.allclose(later.fraction(x, y), still.fraction(x, y), atol=1e-3)
+
+
 def test_streaks_add_to_the_seas_mean_foam():
     streaks = FoamStreaks(19.0, 0.0, 1)
     coverage, reflectance = with_streaks(0.1, 0.2, streaks)
@@ -95,7 +106,7 @@ def test_the_kernels_streaks_are_the_numpy_ones():
 
     from seahaze.render.streak_texture import streak_texture
 
-    streaks = FoamStreaks(18.0, -50.0, 987654321)
+    streaks = FoamStreaks(18.0, -50.0, 987654321, time_s=37.0)  # drifted 20 m
     texture = streak_texture(streaks)
     rng = np.random.default_rng(5)
     # The near sea, where streaks are resolved; positions as the kernel holds them (float32).

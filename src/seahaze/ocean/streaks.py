@@ -46,9 +46,11 @@ The render reads ``s`` at every shading point (:mod:`seahaze.render.streak_textu
 same formulas in drjit), not per mesh vertex: the sea mesh's vertices, 0.3–1 m apart near the
 camera and coarser beyond, blur lines a few decimetres wide into bands (docs/ocean.md).
 
-Limits: the streaks do not drift or age within a sequence (they are fixed to the sea's
-surface frame), do not follow the wave orbital motion, and their spacing does not grow with
-the mixed layer's depth or the wind's duration.
+In a sequence the streaks drift downwind with the surface current (:data:`DRIFT_FRACTION`),
+while the waves, much faster, pass under them.
+
+Limits: the streaks do not age or re-form within a sequence, do not follow the wave orbital
+motion, and their spacing does not grow with the mixed layer's depth or the wind's duration.
 """
 
 from __future__ import annotations
@@ -89,6 +91,10 @@ JITTER = 0.6
 """How far a line may sit from its cell's centre, as a share of the spacing (±half)."""
 STREAK_REFLECTANCE = FOAM_REFLECTANCE
 """Visible reflectance of streak foam (Lambertian): Koepke's effective whitecap reflectance."""
+DRIFT_FRACTION = 0.03
+"""The streaks drift downwind with the wind-driven surface current, about 3 % of ``U10`` (Wu
+1983, "Sea-surface drift currents induced by wind and waves", *J. Phys. Oceanogr.* 13,
+1441–1451): in a sequence the waves pass under them."""
 SEED_SALT = 0x5EA5F0A4
 """Added to the sea's seed: the streaks' noise is unrelated to any other of the scene."""
 
@@ -119,11 +125,19 @@ def line_share(wind_speed: float) -> float:
 @dataclass(frozen=True)
 class FoamStreaks:
     """The streaks of a wind (module docstring): ``wind_speed`` (m/s at 10 m), blowing toward
-    ``toward_deg`` (the waves' direction, counter-clockwise from +x), seeded by ``seed``."""
+    ``toward_deg`` (the waves' direction, counter-clockwise from +x), seeded by ``seed``, at
+    ``time_s`` seconds into a sequence (they have drifted :attr:`drift_m` downwind)."""
 
     wind_speed: float
     toward_deg: float
     seed: int
+    time_s: float = 0.0
+
+    @property
+    def drift_m(self) -> float:
+        """How far the streaks have drifted downwind (m): :data:`DRIFT_FRACTION` of the wind
+        times :attr:`time_s`."""
+        return DRIFT_FRACTION * self.wind_speed * self.time_s
 
     @property
     def present(self) -> bool:
@@ -143,7 +157,7 @@ class FoamStreaks:
         foam, float64 in [0, 1]."""
         az = math.radians(self.toward_deg)
         x, y = np.asarray(x, np.float64), np.asarray(y, np.float64)
-        u = x * math.cos(az) + y * math.sin(az)
+        u = x * math.cos(az) + y * math.sin(az) - self.drift_m
         v = -x * math.sin(az) + y * math.cos(az)
         seed = self.noise_seed
         v = v + MEANDER_M * noise_1d(u / MEANDER_LENGTH_M, np.zeros_like(u), seed)

@@ -192,7 +192,7 @@ def sea_surface_bsdf(spec: SceneSpec, geometry: SceneGeometry) -> dict:
     if SEA_FOAM in weights:
         foam = {"type": "diffuse", "reflectance": weights[SEA_FOAM_REFLECTANCE]}
         water = {"type": "blendbsdf", "weight": weights[SEA_FOAM], "bsdf_0": water, "bsdf_1": foam}
-    streaks = sea_streaks(spec)
+    streaks = sea_streaks(spec, geometry.elapsed_s)
     if streaks is None:
         return water
     # A gale's foam streaks over the water and its whitecaps, read at every shading point.
@@ -206,14 +206,15 @@ def sea_surface_bsdf(spec: SceneSpec, geometry: SceneGeometry) -> dict:
     }
 
 
-def sea_streaks(spec: SceneSpec) -> FoamStreaks | None:
+def sea_streaks(spec: SceneSpec, elapsed_s: float = 0.0) -> FoamStreaks | None:
     """The scene's foam streaks (:mod:`seahaze.ocean.streaks`): from force 7 on a sea with
-    waves and whitecaps, along the waves' direction, seeded as its waves are; else None."""
+    waves and whitecaps, along the waves' direction, seeded as its waves are, drifted to
+    ``elapsed_s`` seconds into its sequence; else None."""
     sea = spec.sea
     if sea.model == "flat" or not sea.whitecaps:
         return None
     seed = stream_seed(spec.render.seed, Stream.SEA, sea.seed)
-    streaks = FoamStreaks(wind_speed(spec), sea.direction_deg, seed)
+    streaks = FoamStreaks(wind_speed(spec), sea.direction_deg, seed, elapsed_s)
     return streaks if streaks.present else None
 
 
@@ -460,7 +461,9 @@ def build_scene(
             shape_ids[key] = -2 if sid == HAZE_BOX_ID else SEA_SHAPE
     # The plane model of the sea (the physical mode's tables) takes the streaks' mean too.
     foam = with_streaks(
-        geometry.sea_foam_coverage, geometry.sea_foam_reflectance, sea_streaks(spec)
+        geometry.sea_foam_coverage,
+        geometry.sea_foam_reflectance,
+        sea_streaks(spec, geometry.elapsed_s),
     )
     return LoadedScene(
         loaded,

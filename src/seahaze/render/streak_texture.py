@@ -4,10 +4,10 @@
 the render kernel (the lattice hash of :mod:`seahaze.render.field_medium`, float32 positions),
 evaluated at the hit's world ``(x, y)``. The sea's BSDF blends a Lambertian streak foam over
 its water and whitecaps by it (:func:`seahaze.render.scene.sea_surface_bsdf`). The wind's
-direction, the share of lines present and the seed are kernel parameters: every scene with
-streaks runs one kernel. An interaction with no shape (a BSDF sampled on its own, as the
-photon tracer's sea samples are) reads 0, as the sea's other textures do; the tables take the
-streaks' mean coverage instead (:func:`seahaze.ocean.streaks.with_streaks`).
+direction, the streaks' drift, the share of lines present and the seed are kernel parameters:
+every scene with streaks runs one kernel. An interaction with no shape (a BSDF sampled on its
+own, as the photon tracer's sea samples are) reads 0, as the sea's other textures do; the
+tables take the streaks' mean coverage instead (:func:`seahaze.ocean.streaks.with_streaks`).
 
 ``tests/test_streaks.py`` holds it to the numpy definition within 1e-4.
 
@@ -58,9 +58,9 @@ def streak_texture(streaks: FoamStreaks) -> Any:
 
 def streak_fraction(streaks: Any, x: Any, y: Any) -> Any:
     """:meth:`FoamStreaks.fraction` in the kernel at world ``(x, y)`` (``mi.Float``), with the
-    texture's kernel parameters ``streaks`` (``cos``, ``sin`` of the direction, ``share``,
-    ``seed``)."""
-    u = x * streaks.cos + y * streaks.sin
+    texture's kernel parameters ``streaks`` (``cos``, ``sin`` of the direction, ``drift``,
+    ``share``, ``seed``)."""
+    u = x * streaks.cos + y * streaks.sin - streaks.drift
     v = y * streaks.cos - x * streaks.sin
     v = v + MEANDER_M * _noise_1d(u * (1.0 / MEANDER_LENGTH_M), mi.Float(0.0), streaks.seed)
     cell = dr.floor(v * (1.0 / SPACING_M))
@@ -108,6 +108,7 @@ def _streak_class() -> type:
             self.sin = dr.opaque(mi.Float, math.sin(az))
             self.share = dr.opaque(mi.Float, line_share(streaks.wind_speed))
             self.seed = dr.opaque(mi.UInt64, streaks.noise_seed)
+            self.drift = dr.opaque(mi.Float, streaks.drift_m)
             self.coverage = streaks.coverage
 
         def eval_1(self, si: Any, active: Any = True) -> Any:
