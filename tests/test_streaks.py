@@ -144,3 +144,16 @@ def test_the_sea_takes_streaks_from_force_7(beaufort):
         str(s.bsdf()) for s in loaded.scene.shapes()
     )
     assert ("FoamStreakTexture" in bsdf) == (beaufort == 8)
+
+
+def test_the_shipped_gale_has_streaks_and_a_shutter():
+    from pathlib import Path
+
+    from seahaze.render.scene import sea_streaks
+    from seahaze.sceneio import parse_scene_text
+
+    path = Path(__file__).resolve().parents[1] / "scenes" / "gale.yaml"
+    spec = parse_scene_text(path.read_text(), str(path))
+    streaks = sea_streaks(spec)
+    assert streaks is not None and streaks.coverage == pytest.approx(MOST_COVERAGE)
+    assert spec.render.camera_model.shutter_s > 0.0 and spec.sequence is not None
