@@ -72,6 +72,20 @@ def test_a_flat_field_stays_flat_and_an_instant_is_untouched():
     assert np.array_equal(blur_along_motion(image, np.zeros((30, 40, 2))), image)
 
 
+def test_only_what_moves_is_blurred():
+    # A shore camera's frame: one vessel moves, the rest holds still and keeps its values.
+    rng = np.random.default_rng(4)
+    image = rng.uniform(0.0, 2.0, (30, 40, 3))
+    motion = np.zeros((30, 40, 2))
+    motion[10:15, 12:20, 0] = 3.0
+    out = blur_along_motion(image, motion)
+    still = np.ones((30, 40), bool)
+    still[10:15, 12:20] = False
+    assert np.array_equal(out[still], image[still])
+    everywhere = blur_along_motion(image, np.broadcast_to(motion[12, 14], motion.shape))
+    assert np.allclose(out[~still], everywhere[~still], rtol=1e-12)
+
+
 def _sky(camera: Camera) -> SimpleNamespace:
     shape = (camera.height, camera.width)
     return SimpleNamespace(

@@ -53,6 +53,9 @@ from .camera import Camera
 MAX_TAPS = 64
 """Most points a pixel averages along its displacement: a streak of more than 64 px is drawn
 with gaps of its length over 64 (such a frame is unusable anyway)."""
+STILL_PX = 1e-3
+"""A pixel whose point moves less than this (pixels) during the exposure keeps its value: its
+average would differ by less than a thousandth of its neighbours' difference."""
 SKY_DISTANCE_M = 1.0e9
 """Where a ray that meets no surface is placed to project it (m): at infinity for any
 platform's motion."""
@@ -70,18 +73,23 @@ def blur_along_motion(linear: np.ndarray, displacement_px: np.ndarray) -> np.nda
     (H, W, 2: along the columns and the rows, pixels) as a global shutter integrates it
     (module docstring, "The filter"); float64."""
     image = np.asarray(linear, np.float64)
+    out = image.copy()
     n = taps(displacement_px)
-    if n == 1:
-        return image.copy()
-    rows, cols = np.mgrid[0 : image.shape[0], 0 : image.shape[1]].astype(np.float64)
-    out = np.zeros_like(image)
+    # Only the pixels that move are averaged (a shore camera's frame: its vessels).
+    moving = np.hypot(displacement_px[..., 0], displacement_px[..., 1]) >= STILL_PX
+    if n == 1 or not moving.any():
+        return out
+    rows, cols = np.nonzero(moving)
+    dx, dy = displacement_px[rows, cols, 0], displacement_px[rows, cols, 1]
+    total = np.zeros((len(rows), image.shape[2]))
     for i in range(n):
         along = (i + 0.5) / n - 0.5
-        at = [rows + along * displacement_px[..., 1], cols + along * displacement_px[..., 0]]
+        at = [rows + along * dy, cols + along * dx]
         for c in range(image.shape[2]):
             # Linear interpolation, coordinates beyond the frame clamped to its edge pixels.
-            out[..., c] += map_coordinates(image[..., c], at, order=1, mode="nearest")
-    return out / n
+            total[:, c] += map_coordinates(image[..., c], at, order=1, mode="nearest")
+    out[rows, cols] = total / n
+    return out
 
 
 def image_displacement(
