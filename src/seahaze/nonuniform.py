@@ -161,11 +161,20 @@ class NonUniformHaze(HazeMedium):
         enter, leave = self.profile.span(oz, d[:, 2], NUMPY)
         leave = np.minimum(leave, dist)
         length = np.maximum(leave - enter, 0.0)
-        counts = self.panel_counts(length, d[:, 2])
+        origins = np.broadcast_to(np.asarray(origin, np.float64), d.shape)
+        return self.lengths_along(origins, d, enter, length).reshape(shape)
+
+    def lengths_along(
+        self, origins: np.ndarray, directions: np.ndarray, enter: np.ndarray, length: np.ndarray
+    ) -> np.ndarray:
+        """``∫ ρ ds`` (m, (N,) float64) along each ray ``origins + s·directions`` ((N, 3),
+        unit directions) over ``s`` from ``enter`` to ``enter + length`` (m, (N,)): the
+        module's quadrature (:meth:`panel_counts` panels of three Gauss–Legendre nodes),
+        summed by :attr:`quadrature`, or here by numpy."""
+        counts = self.panel_counts(length, directions[:, 2])
         if self.quadrature is not None:
-            origins = np.broadcast_to(np.asarray(origin, np.float64), d.shape)
-            return self.quadrature(self, origins, d, enter, length, counts).reshape(shape)
-        out = np.zeros(len(d))
+            return self.quadrature(self, origins, directions, enter, length, counts)
+        out = np.zeros(len(directions))
         # Rays grouped by their panel count: one array shape per group.
         for count in np.unique(counts[counts > 0]):
             rays = np.flatnonzero(counts == count)
@@ -173,9 +182,9 @@ class NonUniformHaze(HazeMedium):
             for start in range(0, len(rays), per_chunk):
                 chosen = rays[start : start + per_chunk]
                 out[chosen] = self._integrate(
-                    np.asarray(origin, np.float64), d[chosen], enter[chosen], length[chosen], count
+                    origins[chosen], directions[chosen], enter[chosen], length[chosen], count
                 )
-        return out.reshape(shape)
+        return out
 
     def panel_counts(self, length: np.ndarray, dz: np.ndarray) -> np.ndarray:
         """How many panels the quadrature takes over ``length`` (m) of rays with direction z
@@ -197,7 +206,7 @@ class NonUniformHaze(HazeMedium):
 
     def _integrate(
         self,
-        origin: np.ndarray,
+        origins: np.ndarray,
         d: np.ndarray,
         enter: np.ndarray,
         length: np.ndarray,
@@ -208,7 +217,7 @@ class NonUniformHaze(HazeMedium):
         width = length / panels  # (rays,)
         mids = (np.arange(panels) + 0.5)[None, :] * width[:, None]  # (rays, panels)
         s = enter[:, None, None] + mids[..., None] + 0.5 * width[:, None, None] * GAUSS_NODES
-        p = origin[None, None, None, :] + s[..., None] * d[:, None, None, :]
+        p = origins[:, None, None, :] + s[..., None] * d[:, None, None, :]
         rho = self.density_at(p[..., 0], p[..., 1], p[..., 2])
         return 0.5 * width * np.einsum("rpk,k->r", rho, GAUSS_WEIGHTS)
 

@@ -13,8 +13,8 @@ temporaries per point. numpy evaluates the same sums one array pass per operatio
 The field's parameters that vary between scenes of a batch — the drift travelled, the seed —
 are kernel parameters, not literals: the kernel compiles once per kind of field.
 
-``tests/test_field_quadrature.py`` holds it to Simpson's rule on 0.1 m steps within 1e-4, as
-the numpy quadrature is held; ``scripts/bench_pixel_density.py`` measures what it costs.
+``tests/test_nonuniform.py`` holds it to Simpson's rule on 0.1 m steps within 1e-4, as it
+holds the numpy sum; ``scripts/bench_pixel_density.py`` measures what it costs.
 
 Import this module only once a Mitsuba variant is set.
 """

@@ -56,6 +56,8 @@ are a loop of their own (:meth:`HazeIntegrator.diffuse_sums`).
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -156,12 +158,18 @@ class HazeIntegrator(mi.SamplingIntegrator):
         vertical profile."""
         self.pixel_ratio = pixel_ratio
 
-    def start_camera_path(self, ray: Any, active: Any) -> None:
-        """Point the levels at the density ratio of camera ray ``ray``'s pixel, where the
-        pass renders haze that varies across the sea (:meth:`set_pixel_ratio`): every
-        segment of the path sees the pixel's equivalent profile."""
+    @contextmanager
+    def camera_path(self, ray: Any, active: Any) -> Iterator[None]:
+        """Trace a camera path of ray ``ray`` inside this block: the levels see the density
+        ratios of its pixel where the pass renders haze that varies across the sea
+        (:meth:`set_pixel_ratio`; every segment of the path sees the pixel's equivalent
+        profile), and none after it (the next trace sets its own)."""
         pixel = None if self.pixel_ratio is None else self.pixel_ratio.at(ray, active)
         self.levels.start(pixel)
+        try:
+            yield
+        finally:
+            self.levels.start(None)
 
     def aov_names(self) -> list[str]:
         return [f"{k}.{c}" for k in range(self.n_levels) for c in "RGB"]
@@ -441,9 +449,8 @@ class CameraPass(HazeIntegrator):
     """The main ``physical`` pass: camera paths for the clean image and every level."""
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
-        self.start_camera_path(ray, mi.Bool(active))
-        path = HazePath.start(mi.Ray3f(ray), mi.Bool(active), self.n_levels, self.grey)
-        path = self.follow(scene, sampler, path)
-        self.levels.start(None)  # traced: the next trace sets its own
+        with self.camera_path(ray, mi.Bool(active)):
+            path = HazePath.start(mi.Ray3f(ray), mi.Bool(active), self.n_levels, self.grey)
+            path = self.follow(scene, sampler, path)
         aovs = [c for r in path.res for c in (r.x, r.y, r.z)]
         return mi.Spectrum(path.clean), mi.Bool(True), aovs

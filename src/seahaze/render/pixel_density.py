@@ -194,7 +194,7 @@ def mirror_ratio(medium: NonUniformHaze, points: np.ndarray, dirs: np.ndarray) -
     climb = np.maximum(up[:, 2], 1e-9)
     length = np.minimum(np.maximum(profile.top - points[:, 2], 0.0) / climb, RAY_REACH_M)
     _, profile_length = profile.reduced_length(points[:, 2], up[:, 2], length, NUMPY)
-    field_length = _field_quadrature(medium, points, up, length)
+    field_length = medium.lengths_along(points, up, np.zeros(len(points)), length)
     return _ratio(field_length, np.asarray(profile_length, np.float64))
 
 
@@ -211,7 +211,8 @@ def sun_depths(
     ``sun_direction``, above the horizon) up to the medium's top, in the field and in its
     profile alone (each (N,), float64). The profile's in closed form,
     ``(h(top) − h(z)) / μ_sun``; the field's by the transmission maps' quadrature
-    (:func:`_field_quadrature`)."""
+    (:meth:`NonUniformHaze.lengths_along`, summed by the render's kernel where
+    :func:`seahaze.render.engine.open_session` gave the medium it)."""
     profile = medium.profile
     mu = float(sun_direction[2])
     if mu <= 0.0:
@@ -221,22 +222,8 @@ def sun_depths(
     profile_depth = (reduced_top - np.asarray(profile.reduced_height(z, NUMPY))) / mu
     length = np.maximum(profile.top - points[:, 2], 0.0) / mu
     directions = np.broadcast_to(np.asarray(sun_direction, np.float64), points.shape)
-    field_depth = _field_quadrature(medium, points, directions, length)
+    field_depth = medium.lengths_along(points, directions, np.zeros(len(points)), length)
     return field_depth, profile_depth
-
-
-def _field_quadrature(
-    medium: NonUniformHaze, points: np.ndarray, directions: np.ndarray, length: np.ndarray
-) -> np.ndarray:
-    """``∫₀^L c ρ_v m ds`` from each point along its unit direction (``directions``, (N, 3))
-    over its ``length`` (m): the transmission maps' quadrature and kernel
-    (:meth:`NonUniformHaze.panel_counts`,
-    :func:`seahaze.render.field_quadrature.kernel_path_lengths`)."""
-    from .field_quadrature import kernel_path_lengths
-
-    panels = medium.panel_counts(length, directions[:, 2])
-    start = np.zeros(len(points))
-    return kernel_path_lengths(medium, points, directions, start, length, panels)
 
 
 def pixel_density_ratio(medium: NonUniformHaze, geometry: GeometryPass) -> np.ndarray:

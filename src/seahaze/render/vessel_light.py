@@ -61,13 +61,12 @@ class VesselLightPass(HazeIntegrator):
     def sample(self, scene, sampler, ray, medium=None, active=True):
         """The correction pass: :meth:`vessel_light` along the camera segment, for every
         level (no clean radiance)."""
-        self.start_camera_path(ray, mi.Bool(active))
-        si = scene.ray_intersect(ray, active)
-        t_end = dr.select(si.is_valid(), si.t, dr.inf)
-        enter, length = self.levels.segment(ray.o, ray.d, t_end)
-        res = [dr.zeros(mi.Color3f) for _ in range(self.n_levels)]
-        self.vessel_light(scene, sampler, ray, enter, length, res, active & (length > 0.0))
-        self.levels.start(None)  # traced: the next trace sets its own
+        with self.camera_path(ray, mi.Bool(active)):
+            si = scene.ray_intersect(ray, active)
+            t_end = dr.select(si.is_valid(), si.t, dr.inf)
+            enter, length = self.levels.segment(ray.o, ray.d, t_end)
+            res = [dr.zeros(mi.Color3f) for _ in range(self.n_levels)]
+            self.vessel_light(scene, sampler, ray, enter, length, res, active & (length > 0.0))
         aovs = [c for r in res for c in (r.x, r.y, r.z)]
         return mi.Spectrum(0.0), mi.Bool(True), aovs
 
