@@ -173,11 +173,14 @@ def water_bsdf_dict(spec: SceneSpec, roughness: float) -> dict:
     }
 
 
-def sea_surface_bsdf(spec: SceneSpec, geometry: SceneGeometry) -> dict:
+def sea_surface_bsdf(
+    spec: SceneSpec, geometry: SceneGeometry, streaks: FoamStreaks | None = None
+) -> dict:
     """The sea shape's BSDF: water of :func:`water_bsdf_dict`, its near and far roughness lobes
     mixed per vertex, under foam where the sea mesh has some (module docstring). The per-vertex
     weights are read by :func:`~seahaze.render.mesh_textures.vertex_textures` textures of the sea
-    mesh, not Mitsuba's ``mesh_attribute`` (a virtual call to the shape inside the BSDF's)."""
+    mesh, not Mitsuba's ``mesh_attribute`` (a virtual call to the shape inside the BSDF's).
+    ``streaks`` (:func:`sea_streaks`), where a gale draws them, are blended over it all."""
     sea = geometry.sea
     weights = vertex_textures(sea.faces, sea.attributes)
     water = water_bsdf_dict(spec, geometry.sea_roughness)
@@ -192,7 +195,6 @@ def sea_surface_bsdf(spec: SceneSpec, geometry: SceneGeometry) -> dict:
     if SEA_FOAM in weights:
         foam = {"type": "diffuse", "reflectance": weights[SEA_FOAM_REFLECTANCE]}
         water = {"type": "blendbsdf", "weight": weights[SEA_FOAM], "bsdf_0": water, "bsdf_1": foam}
-    streaks = sea_streaks(spec, geometry.elapsed_s)
     if streaks is None:
         return water
     # A gale's foam streaks over the water and its whitecaps, read at every shading point.
@@ -434,7 +436,8 @@ def build_scene(
     # fresh process rendering that scene alone.
     fleet = fleet_meshes(geometry.vessels, (camera.x_m, camera.y_m))
     materials = vessel_materials([part.roughness for part in fleet], black_vessels)
-    surfaces = {"sea": _sea_mesh(geometry.sea, sea_surface_bsdf(spec, geometry))}
+    streaks = sea_streaks(spec, geometry.elapsed_s)
+    surfaces = {"sea": _sea_mesh(geometry.sea, sea_surface_bsdf(spec, geometry, streaks))}
     for part, material in zip(fleet, materials, strict=True):
         surfaces[part.name] = _mesh(part.name, part.vertices, part.faces, material.bsdf)
     scene.update(surfaces)
@@ -460,11 +463,7 @@ def build_scene(
         else:
             shape_ids[key] = -2 if sid == HAZE_BOX_ID else SEA_SHAPE
     # The plane model of the sea (the physical mode's tables) takes the streaks' mean too.
-    foam = with_streaks(
-        geometry.sea_foam_coverage,
-        geometry.sea_foam_reflectance,
-        sea_streaks(spec, geometry.elapsed_s),
-    )
+    foam = with_streaks(geometry.sea_foam_coverage, geometry.sea_foam_reflectance, streaks)
     return LoadedScene(
         loaded,
         params,
