@@ -43,6 +43,7 @@ radiance, and the boxes the instant's (the exposure is centred on the frame's ti
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -140,11 +141,15 @@ def _apply(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
     return points @ matrix[:3, :3].T + matrix[:3, 3]
 
 
-def shutter_displacement(spec: Any, frame: int | None, geometry: Any) -> np.ndarray | None:
+def shutter_displacement(
+    spec: Any, frame: int | None, geometry: Any, camera: Camera, vessels: Sequence[Any]
+) -> np.ndarray | None:
     """Each pixel's displacement (:func:`image_displacement`) over the shutter time of the
     scene's camera model (``render.camera_model.shutter_s``) at ``frame`` of its sequence, for
-    the points of the frame's ``geometry``; None for an instant (no camera model, a shutter
-    time of 0, or a still: only a sequence moves)."""
+    the points of the frame's ``geometry`` pass, seen at the frame's instant by ``camera``
+    among ``vessels`` (:class:`seahaze.world.VesselInstance`: their indices and placements);
+    None for an instant (no camera model, a shutter time of 0, or a still: only a sequence
+    moves)."""
     from .world import frame_camera, frame_layout
 
     settings = spec.render.camera_model
@@ -152,14 +157,15 @@ def shutter_displacement(spec: Any, frame: int | None, geometry: Any) -> np.ndar
         return None
     half = 0.5 * settings.shutter_s
     cameras = (frame_camera(spec, frame, -half), frame_camera(spec, frame, half))
-    # The layout as the frame's geometry was built: from the frame's own camera.
-    camera = frame_camera(spec, frame)
-    now, _ = frame_layout(spec, camera, frame)
+    # The layouts as the frame's geometry was built: from the frame's own camera.
     opening, _ = frame_layout(spec, camera, frame, offset_s=-half)
     closing, _ = frame_layout(spec, camera, frame, offset_s=half)
     motions = {
-        index: (rigid_motion(_pose(p), _pose(a)), rigid_motion(_pose(p), _pose(b)))
-        for index, (p, a, b) in enumerate(zip(now, opening, closing, strict=True))
+        v.index: (
+            rigid_motion(_pose(v.placement), _pose(opening[v.index])),
+            rigid_motion(_pose(v.placement), _pose(closing[v.index])),
+        )
+        for v in vessels
     }
     return image_displacement(geometry, cameras, motions)
 

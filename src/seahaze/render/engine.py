@@ -261,7 +261,9 @@ def render_scene(
     if frame is not None and spec.sequence is not None:
         scene.meta = sequence_meta(scene.meta, session.geometry, spec, frame, session.camera)
         # The camera model's shutter: what moved during the frame's exposure.
-        scene.motion_px = shutter_displacement(spec, frame, scene.geometry)
+        scene.motion_px = shutter_displacement(
+            spec, frame, scene.geometry, session.camera, session.geometry.vessels
+        )
         if scene.motion_px is not None:
             model = scene.meta["render"]["camera_model"]
             model["motion_blur"] = motion_meta(scene.motion_px)
