@@ -212,6 +212,7 @@ def build_sea(
     surface = ocean.make_surface(params) if surface is None else surface
     wakes = ocean.WakeField(moving) if moving else None
     foam = sea_whitecaps(spec, surface) if whitecaps is None else whitecaps.result()
+    spindrift = None if foam is None else ocean.Spindrift(foam, spec.sea.direction_deg)
     mesh = ocean.build_sea_mesh_data(
         surface,
         camera_xy=(camera.x_m, camera.y_m),
@@ -220,6 +221,7 @@ def build_sea(
         foam=foam,
         wakes=wakes,
         view=(math.radians(camera.heading_deg), camera.view_azimuth_half_width()),
+        spindrift=spindrift,
     )
     attributes: dict[str, np.ndarray] = {}
     if mesh.foam is not None and mesh.foam_reflectance is not None and mesh.foam.max() > 0.0:
@@ -239,7 +241,10 @@ def build_sea(
     sea = MeshData("sea", mesh.vertices, mesh.faces, spec.sea.water_color, roughness, attributes)
     if foam is None:
         return Sea(sea, roughness, surface, near)
-    return Sea(sea, roughness, surface, near, foam.mean_fraction, foam.mean_reflectance)
+    if spindrift is None or not spindrift.present:
+        return Sea(sea, roughness, surface, near, foam.mean_fraction, foam.mean_reflectance)
+    coverage, albedo = ocean.under_veil(foam.mean_fraction, foam.albedo, spindrift.mean_veil)
+    return Sea(sea, roughness, surface, near, float(coverage), float(albedo) / float(coverage))
 
 
 def vessel_speeds(spec: SceneSpec, placements: Sequence[vessels.Placement]) -> list[float]:

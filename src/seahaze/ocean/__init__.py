@@ -10,6 +10,7 @@
   budget between resolved and sub-grid slopes.
 * :mod:`~seahaze.ocean.whitecaps` — whitecap coverage (Monahan & O'Muircheartaigh 1980), foam
   reflectance (Koepke 1984), and a foam field on the breaking crests.
+* :mod:`~seahaze.ocean.spindrift` — a gale's spray veil blown downwind of its breaking crests.
 * :mod:`~seahaze.ocean.wake` — Kelvin ship waves, bow waves and turbulent foam wakes of moving
   vessels.
 
@@ -49,6 +50,7 @@ from .gerstner import GerstnerOcean
 from .kelvin import transverse_wavelength
 from .mesh import SeaMesh, build_sea_mesh, build_sea_mesh_data, horizon_gap_angle
 from .spectra import SeaSpectrum
+from .spindrift import Spindrift, spindrift_opacity, under_veil
 from .surface import make_surface
 from .wake import MovingVessel, ShipWaves, WakeField, wake_foam, wake_height
 from .whitecaps import (
@@ -79,6 +81,7 @@ __all__ = [
     "SeaSpectrum",
     "ShipWaves",
     "SlopeBudget",
+    "Spindrift",
     "WakeField",
     "beaufort",
     "beaufort_force_for_wind",
@@ -99,8 +102,10 @@ __all__ = [
     "mesh_roughness",
     "ocean_params_for_beaufort",
     "slope_budget",
+    "spindrift_opacity",
     "sub_grid_roughness",
     "transverse_wavelength",
+    "under_veil",
     "wake_foam",
     "wake_height",
     "whitecap_albedo",

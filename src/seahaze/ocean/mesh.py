@@ -45,7 +45,9 @@ Foam and wakes (optional)
     footprint, so a wake narrower than the far rings' spacing is neither lost between vertices
     nor smeared over a whole ring — is combined with the whitecaps as independent coverages,
     ``1 - (1 - f_sea)(1 - f_wake)``; wake foam is fresh (reflectance 0.55), its thinning with
-    age being in its fraction.
+    age being in its fraction. Given a :class:`~seahaze.ocean.spindrift.Spindrift` (a gale's
+    spray veil), each seen vertex's foam is seen through the veil at its rest position, the
+    unseen ones through its mean.
 
 Detail where it is seen (optional)
     Given the camera's view (its heading and the largest horizontal angle of its rays,
@@ -77,9 +79,11 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from .base import OceanSurface, cell_samples, smoothstep
+from .spindrift import under_veil
 from .whitecaps import FOAM_REFLECTANCE, FRESH_FOAM_REFLECTANCE
 
 if TYPE_CHECKING:
+    from .spindrift import Spindrift
     from .wake import WakeField
     from .whitecaps import FoamField
 
@@ -307,6 +311,7 @@ def build_sea_mesh_data(
     foam: FoamField | None = None,
     wakes: WakeField | None = None,
     view: tuple[float, float] | None = None,
+    spindrift: Spindrift | None = None,
 ) -> SeaMesh:
     """Build the polar sea mesh around ``camera_xy`` (see the module docstring).
 
@@ -323,6 +328,9 @@ def build_sea_mesh_data(
             (:class:`~seahaze.ocean.wake.WakeField`), if any.
         view: ``(heading, half_width)`` (rad) of the camera at ``camera_xy``: waves, whitecaps
             and wakes only where they can be seen (module docstring); None: everywhere.
+        spindrift: the gale's spray veil over ``foam``
+            (:class:`~seahaze.ocean.spindrift.Spindrift`), if any: joins the foam layer
+            (:func:`~seahaze.ocean.spindrift.under_veil`), its mean where nobody looks.
     """
     if quality not in QUALITY_PRESETS:
         raise ValueError(f"quality must be one of {sorted(QUALITY_PRESETS)}, got {quality!r}")
@@ -361,6 +369,10 @@ def build_sea_mesh_data(
     foam_values, foam_albedo = _unseen_foam(foam, x.size)
     cells = (x[seen], y[seen], azimuth[seen], radial[seen], tangential[seen])
     foam_values[seen], foam_albedo[seen] = _vertex_foam(surface, foam, *cells, spacing[seen])
+    if spindrift is not None and spindrift.present:
+        veil = np.full_like(x, spindrift.mean_veil)
+        veil[seen] = spindrift.veil(x[seen], y[seen], spacing[seen])
+        foam_values, foam_albedo = under_veil(foam_values, foam_albedo, veil)
     weight = displacement_fade(r, fade_start, fade_end) * (1.0 if detail is None else detail)
     displaced = np.nonzero(weight > 0.0)[0]
     if displaced.size:

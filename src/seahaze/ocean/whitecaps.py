@@ -78,7 +78,8 @@ Far field
     :attr:`FoamField.mean_reflectance` (0.185).
 
 Limits: no foam memory (a patch of foam does not drift or decay after the crest has passed),
-no spray (the wind's streaks are :mod:`seahaze.ocean.streaks`), coverage from the wind alone
+no spray in the air (the wind's streaks are :mod:`seahaze.ocean.streaks`, a gale's spindrift
+:mod:`seahaze.ocean.spindrift`, both on the surface), coverage from the wind alone
 (not from the generated wave steepness).
 """
 
