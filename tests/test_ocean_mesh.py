@@ -11,6 +11,7 @@ from scipy.sparse.csgraph import connected_components
 
 from seahaze.camera import Camera
 from seahaze.ocean import (
+    FRESH_FOAM_REFLECTANCE,
     FlatSurface,
     FoamField,
     OceanParams,
@@ -198,5 +199,6 @@ def test_the_sea_outside_the_view_is_flat_with_the_mean_whitecaps() -> None:
     np.testing.assert_array_equal(viewed.vertices[inside], full.vertices[inside])
     np.testing.assert_array_equal(viewed.foam[inside], full.foam[inside])
     assert np.all(viewed.vertices[outside, 2] == 0.0)
-    np.testing.assert_allclose(viewed.foam[outside], foam.mean_fraction, rtol=1e-6)
+    share = foam.albedo / FRESH_FOAM_REFLECTANCE  # the mean foam, as a share of fresh foam
+    np.testing.assert_allclose(viewed.foam[outside], share, rtol=1e-6)
     assert np.abs(full.vertices[outside, 2]).max() > 0.5  # the full mesh had waves there

@@ -158,11 +158,15 @@ def test_sea_mesh_carries_per_vertex_foam() -> None:
     area = np.concatenate([[0.0], np.repeat(cell, mesh.n_theta)])
     far = r > mesh.fade_end_m
     far_mean = np.sum(mesh.foam[far] * area[far]) / np.sum(area[far])
-    assert far_mean == pytest.approx(foam.mean_fraction, rel=0.25)
-    assert mesh.foam[far].std() > 0.2 * whitecap_coverage(15.0)  # cells with whitecaps, without
+    # The foam as a share of fresh foam (module docstring, *Rendering*): the field's albedo.
+    share = foam.albedo / FRESH_FOAM_REFLECTANCE
+    assert far_mean == pytest.approx(share, rel=0.25)
+    assert mesh.foam[far].std() > 0.2 * share  # cells with whitecaps, without
     near = r < 0.5 * mesh.fade_start_m
-    assert mesh.foam[near].max() > 0.9  # resolved whitecaps near the camera
-    assert 0.3 * whitecap_coverage(15.0) < np.mean(mesh.foam[near] > 0.5) < 3.0 * 0.0393
+    assert mesh.foam[near].max() > 0.9  # resolved fresh whitecaps near the camera
+    # Vertices whose foam albedo reaches half of Koepke's R_eff: a part of the counted W.
+    bright = mesh.foam[near] * FRESH_FOAM_REFLECTANCE > 0.5 * FOAM_REFLECTANCE
+    assert 0.3 * whitecap_coverage(15.0) < np.mean(bright) < whitecap_coverage(15.0)
 
 
 def test_koepke_decay_makes_the_counted_whitecaps_effective_reflectance() -> None:
@@ -229,25 +233,27 @@ def test_far_field_means_are_the_field_means(u10: float) -> None:
     assert 1.0 < foam.albedo / whitecap_albedo(u10) < 1.1
 
 
-def test_sea_mesh_carries_the_foam_reflectance() -> None:
-    """Per vertex: the field's reflectance where the mesh resolves whitecaps, Koepke's 0.22 on
-    average in the far field, and the sea's mean foam albedo W·R_eff is kept."""
+def test_sea_mesh_draws_foam_as_a_share_of_fresh_foam() -> None:
+    """Per vertex the field's foam albedo (fraction × reflectance) is kept and drawn as a share
+    of fresh foam, ``albedo / 0.55``, the water between: fresh and whole on the resolved
+    crests, a small share on the faint residual foam, the field's mean albedo in the far field
+    and the sea's mean foam albedo W·R_eff near the camera."""
     from seahaze.ocean import build_sea_mesh_data
 
     surface = _surface("fft", 15.0)
-    mesh = build_sea_mesh_data(
-        surface, camera_height_m=10.0, quality="low", foam=FoamField(surface, 15.0)
-    )
+    foam = FoamField(surface, 15.0)
+    mesh = build_sea_mesh_data(surface, camera_height_m=10.0, quality="low", foam=foam)
     assert mesh.foam is not None and mesh.foam_reflectance is not None
     assert mesh.foam_reflectance.dtype == np.float32
+    assert np.all(mesh.foam_reflectance == np.float32(FRESH_FOAM_REFLECTANCE))
     r = np.hypot(mesh.vertices[:, 0], mesh.vertices[:, 1])
     far = r > mesh.fade_end_m
-    far_albedo = np.sum(mesh.foam[far] * mesh.foam_reflectance[far])
-    foam = FoamField(surface, 15.0)
-    assert far_albedo / np.sum(mesh.foam[far]) == pytest.approx(foam.mean_reflectance, rel=0.2)
+    assert float(np.mean(mesh.foam[far])) * FRESH_FOAM_REFLECTANCE == pytest.approx(
+        foam.albedo, rel=0.2
+    )
     near = r < 0.5 * mesh.fade_start_m
-    foamy = near & (mesh.foam > 0.5)
-    assert mesh.foam_reflectance[foamy].max() > 0.45
-    assert mesh.foam_reflectance[foamy].min() < 0.2
-    albedo = mesh.foam[near] * mesh.foam_reflectance[near]
+    albedo = mesh.foam[near] * FRESH_FOAM_REFLECTANCE
     assert float(np.mean(albedo)) == pytest.approx(whitecap_albedo(15.0), rel=0.5)
+    # The faint foam (albedo below Koepke's faintest counted whitecap) covers at most a tenth.
+    faint = (albedo > 0.0) & (albedo < COUNTED_FOAM_REFLECTANCE)
+    assert np.any(faint) and mesh.foam[near][faint].max() < 0.11

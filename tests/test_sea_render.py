@@ -131,19 +131,22 @@ def test_vessel_meta_records_the_speed() -> None:
 
 
 def test_sea_geometry_carries_foam_wakes_and_the_roughness_mix() -> None:
-    """The sea mesh's attributes: the whitecaps' foam (in the far field the coverage law's W
-    and the residual foam around the whitecaps, 1.25 W), the wake of a moving vessel, and the
-    near-lobe weight; the switches remove them."""
+    """The sea mesh's attributes: the whitecaps' foam (in the far field, as a share of fresh
+    foam, the albedo of the coverage law's W at Koepke's R_eff and of the residual foam around
+    the whitecaps: W·(0.22 + 0.011)/0.55), the wake of a moving vessel, and the near-lobe
+    weight; the switches remove them."""
     moving = _spec(vessels={"placed": [{**TUG, "speed_kn": 12.0}]})
     camera = Camera.from_spec(moving.camera)
     geometry = build_geometry(moving, camera)
     sea = geometry.sea
     assert set(sea.attributes) == {SEA_FOAM, SEA_FOAM_REFLECTANCE, SEA_NEAR_ROUGHNESS}
     law = ocean.whitecap_coverage(12.0)
-    assert geometry.sea_foam_coverage == pytest.approx(1.25 * law)
+    share = law * (ocean.FOAM_REFLECTANCE + 0.011) / ocean.FRESH_FOAM_REFLECTANCE
+    assert geometry.sea_foam_coverage == pytest.approx(share, rel=0.01)
+    assert geometry.sea_foam_reflectance == ocean.FRESH_FOAM_REFLECTANCE
     r = np.hypot(sea.vertices[:, 0], sea.vertices[:, 1])
     far = sea.attributes[SEA_FOAM][(r > 5_000.0) & (r < 20_000.0)]
-    assert float(np.mean(far)) == pytest.approx(1.25 * law, rel=0.3)  # distant whitecaps
+    assert float(np.mean(far)) == pytest.approx(share, rel=0.3)  # distant whitecaps
     assert geometry.sea_roughness == pytest.approx(ocean.cox_munk_alpha(12.0))
     assert geometry.sea_roughness_near is not None
     assert geometry.sea_roughness_near < geometry.sea_roughness
@@ -189,10 +192,10 @@ def test_the_loaded_scene_exposes_the_flat_sea_optics_for_the_physical_table() -
     geometry = build_geometry(spec, camera)
     loaded = build_scene(spec, camera, geometry, [1000.0], haze_box=False)
     assert loaded.sea_roughness == pytest.approx(ocean.cox_munk_alpha(12.0))
-    # The plane model's foam is the whitecaps' and their residual foam's: W·(1 + 0.5/2) at
-    # a mean albedo of Koepke's W·R_eff and the residual's few per cent.
+    # The plane model's foam is the whitecaps' and their residual foam's: a mean albedo of
+    # Koepke's W·R_eff and the residual's few per cent, as a share of fresh foam.
     coverage, reflectance = loaded.sea_foam_coverage, loaded.sea_foam_reflectance
-    assert coverage == pytest.approx(1.25 * ocean.whitecap_coverage(12.0))
+    assert reflectance == ocean.FRESH_FOAM_REFLECTANCE
     assert 1.0 < coverage * reflectance / ocean.whitecap_albedo(12.0) < 1.1
     (shape,) = [s for s in loaded.scene.shapes() if s.id() == "sea"]
     water = mi.load_dict(water_bsdf_dict(spec, loaded.sea_roughness))
@@ -455,3 +458,53 @@ def test_rendered_whitecap_fraction_follows_the_coverage_law(wind: float) -> Non
     by_albedo = sum(m * a for _, m, a in results) / area
     assert law / 2.0 < by_albedo < 2.0 * law, (by_albedo, law)
     assert 0.2 * law < by_threshold < law, (by_threshold, law)
+
+
+@pytest.mark.usefixtures("mitsuba_variant")
+@pytest.mark.parametrize("heading_deg", [0.0, 120.0])
+def test_faint_foam_never_darkens_the_water_it_lies_on(heading_deg: float) -> None:
+    """Foam is drawn as a share of fresh foam with the water between (docs/ocean.md,
+    *Whitecaps*), so even the faintest foam is at least as bright as the water around it. Drawn
+    instead as a Lambertian of its own low reflectance over the whole patch (0.02-0.06 for the
+    residual foam), it hid the water's Fresnel reflection of a bright sky at grazing incidence
+    and put dark, brownish rims around the whitecaps (that code made 0.1-0.2 % of the sea's
+    pixels here more than 20 % darker with the foam than without). A bridge-height camera
+    looking 8° down across a force-8 sea, the sun behind it; clean renders with and without
+    the foam, the same paths."""
+    from seahaze.render import passes
+    from seahaze.render.scene import build_scene
+
+    spec = SceneSpec.model_validate(
+        {
+            "camera": {
+                "height_m": 20.0,
+                "fov_deg": 60.0,
+                "pitch_deg": -8.0,
+                "heading_deg": heading_deg,
+                "resolution": [160, 90],
+            },
+            "sun": {"elevation_deg": 30.0, "azimuth_deg": (heading_deg + 140.0) % 360.0},
+            "sea": {
+                "model": "fft",
+                "wind_speed": 17.0,
+                "fetch_km": 300.0,
+                "seed": 5,
+                "direction_deg": heading_deg + 90.0,
+            },
+            "haze": {"levels": [1000.0]},
+            "render": {"mode": "reference", "spp": 16, "seed": 2},
+        }
+    )
+    camera = Camera.from_spec(spec.camera)
+    geometry = build_geometry(spec, camera)
+    attributes = geometry.sea.attributes
+    images = []
+    for changes in ({}, {SEA_FOAM: np.zeros_like(attributes[SEA_FOAM])}):
+        sea_mesh = replace(geometry.sea, attributes={**attributes, **changes})
+        loaded = build_scene(spec, camera, replace(geometry, sea=sea_mesh), [1000.0])
+        images.append(passes.render_clean(loaded, 16, 2, 0.998, 0.75) @ LUMINANCE)
+    geo = passes.render_geometry(loaded)
+    sea = np.isfinite(geo.distance_m) & (geo.instance == -1)
+    ratio = images[0][sea] / np.maximum(images[1][sea], 1e-12)
+    assert np.mean(ratio > 1.1) > 0.05  # the foam is there, and it shows
+    assert np.mean(ratio < 0.8) < 2e-4  # and nowhere does it darken the sea (2 pixels of 10240)

@@ -120,15 +120,13 @@ def test_the_sea_takes_spindrift_from_force_8(force):
     foam = sea_whitecaps(spec, sea.surface)
     spindrift = Spindrift(foam, spec.sea.direction_deg)
     assert spindrift.present == (force == 8)
-    # The plane model of the sea: the whitecaps' means, seen through the veil's mean.
-    want = under_veil(foam.mean_fraction, foam.albedo, spindrift.mean_veil)
-    assert sea.foam_coverage == pytest.approx(want[0], rel=1e-12)
-    assert sea.foam_coverage * sea.foam_reflectance == pytest.approx(want[1], rel=1e-12)
-    if force == 7:  # no spindrift: the whitecaps' own numbers, to the bit
-        assert (sea.foam_coverage, sea.foam_reflectance) == (
-            foam.mean_fraction,
-            foam.mean_reflectance,
-        )
+    # The plane model of the sea: the whitecaps' mean albedo seen through the veil's mean,
+    # drawn as a share of fresh foam.
+    albedo = under_veil(foam.mean_fraction, foam.albedo, spindrift.mean_veil)[1]
+    assert sea.foam_reflectance == ocean.FRESH_FOAM_REFLECTANCE
+    assert sea.foam_coverage * sea.foam_reflectance == pytest.approx(albedo, rel=1e-12)
+    if force == 7:  # no spindrift: the whitecaps' own albedo, to the bit
+        assert sea.foam_coverage == foam.albedo / ocean.FRESH_FOAM_REFLECTANCE
     # The mesh: the same sea with and without the veil (force 7: the same bytes).
     common = {
         "camera_xy": (camera.x_m, camera.y_m),

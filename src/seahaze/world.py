@@ -109,12 +109,13 @@ class SceneGeometry:
     """Beckmann ``alpha`` where the mesh resolves its waves (the sub-grid slopes only); None
     when the whole sea has :attr:`sea_roughness` (flat sea, or ``sea.roughness`` given)."""
     sea_foam_coverage: float = 0.0
-    """Mean foam fraction of the sea surface (0–1): the whitecaps' ``FoamField.mean_fraction``,
-    the coverage ``W`` of the wind and the faint residual foam around it (0 without
+    """Mean share of the sea surface (0–1) covered by fresh foam (``ocean.as_fresh_foam``):
+    the whitecaps' mean foam albedo ``FoamField.albedo`` (the coverage ``W`` of the wind and
+    the faint residual foam around it) over 0.55, with a gale's spindrift (0 without
     whitecaps)."""
     sea_foam_reflectance: float = ocean.FOAM_REFLECTANCE
-    """Mean reflectance of that foam (``FoamField.mean_reflectance``): coverage × reflectance
-    is the mean foam albedo of the sea mesh."""
+    """Reflectance of that foam (fresh foam's 0.55 where there are whitecaps): coverage ×
+    reflectance is the mean foam albedo of the sea mesh."""
     camera_xy: tuple[float, float] = (0.0, 0.0)
     """Horizontal camera position (m) the distances are measured from (a ship platform's)."""
     elapsed_s: float = 0.0
@@ -241,10 +242,11 @@ def build_sea(
     sea = MeshData("sea", mesh.vertices, mesh.faces, spec.sea.water_color, roughness, attributes)
     if foam is None:
         return Sea(sea, roughness, surface, near)
-    if spindrift is None or not spindrift.present:
-        return Sea(sea, roughness, surface, near, foam.mean_fraction, foam.mean_reflectance)
-    coverage, albedo = ocean.under_veil(foam.mean_fraction, foam.albedo, spindrift.mean_veil)
-    return Sea(sea, roughness, surface, near, float(coverage), float(albedo) / float(coverage))
+    coverage, albedo = foam.mean_fraction, foam.albedo
+    if spindrift is not None and spindrift.present:
+        coverage, albedo = ocean.under_veil(coverage, albedo, spindrift.mean_veil)
+    share, reflectance = ocean.as_fresh_foam(coverage, albedo)
+    return Sea(sea, roughness, surface, near, share, reflectance)
 
 
 def vessel_speeds(spec: SceneSpec, placements: Sequence[vessels.Placement]) -> list[float]:

@@ -47,7 +47,9 @@ Foam and wakes (optional)
     ``1 - (1 - f_sea)(1 - f_wake)``; wake foam is fresh (reflectance 0.55), its thinning with
     age being in its fraction. Given a :class:`~seahaze.ocean.spindrift.Spindrift` (a gale's
     spray veil), each seen vertex's foam is seen through the veil at its rest position, the
-    unseen ones through its mean.
+    unseen ones through its mean. What a vertex finally carries is the share of fresh foam
+    that gives its foam albedo (:func:`~seahaze.ocean.whitecaps.as_fresh_foam`: faint foam is
+    a little fresh foam on water, not a dim layer hiding the water's reflection).
 
 Detail where it is seen (optional)
     Given the camera's view (its heading and the largest horizontal angle of its rays,
@@ -80,7 +82,7 @@ import numpy as np
 
 from .base import OceanSurface, cell_samples, smoothstep
 from .spindrift import under_veil
-from .whitecaps import FOAM_REFLECTANCE, FRESH_FOAM_REFLECTANCE
+from .whitecaps import FRESH_FOAM_REFLECTANCE, as_fresh_foam
 
 if TYPE_CHECKING:
     from .spindrift import Spindrift
@@ -127,10 +129,11 @@ class SeaMesh:
         n_theta: vertices per ring.
         center_xy: world position of the centre (m).
         fade_start_m, fade_end_m: displacement fade radii (m); 0 for a flat sea.
-        foam: ``(N,)`` float32 foam fraction per vertex (0–1), or ``None`` when the mesh was
-            built without a foam field and without wakes.
+        foam: ``(N,)`` float32 share of the surface per vertex (0–1) covered by fresh foam:
+            the foam's albedo over 0.55 (:func:`~seahaze.ocean.whitecaps.as_fresh_foam`), or
+            ``None`` when the mesh was built without a foam field and without wakes.
         foam_reflectance: ``(N,)`` float32 visible reflectance of that foam (Lambertian albedo,
-            0–1), or ``None`` with ``foam``.
+            0–1: fresh foam's 0.55), or ``None`` with ``foam``.
         detail: ``(N,)`` weight (0–1) of the waves and wakes at every vertex, 1 inside the
             camera's view (module docstring), or ``None`` when the mesh was built without a
             view (full detail everywhere).
@@ -388,9 +391,7 @@ def build_sea_mesh_data(
         # Where both overlap the wake's fresh foam lies on top of the whitecap.
         foam_albedo = foam_albedo * (1.0 - wake_foam) + wake_foam * FRESH_FOAM_REFLECTANCE
         foam_values = 1.0 - (1.0 - foam_values) * (1.0 - wake_foam)
-    reflectance = np.where(
-        foam_values > 0.0, foam_albedo / np.maximum(foam_values, 1e-30), FOAM_REFLECTANCE
-    )
+    foam_values, reflectance = as_fresh_foam(foam_values, foam_albedo)
 
     vertices = np.stack([x, y, z], axis=1).astype(np.float32)
     faces = polar_grid_faces(n_theta, len(radii) - 1)

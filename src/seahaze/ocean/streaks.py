@@ -74,9 +74,11 @@ WIDTH_M = 1.2
 MAX_LINE_SHARE = 0.6
 """The largest share of the cells that hold a line: so many missing keep the lines' spacing
 irregular (1 to several cells) at the strongest winds."""
-LACE_M = (2.5, 0.4)
+LACE_M = (12.0, 0.35)
 """Lattice steps (m) along and across the wind of the noise that breaks a streak into the
-flecks and gaps of floating foam."""
+fibres and gaps of floating foam: long along the wind, so that the flecks read as threads
+drawn out by it (at 2.5 m along, seen along the wind from a bridge, they stacked into the
+rungs of a ladder)."""
 BRIGHTNESS = (0.4, 0.6)
 """A line's foam density: ``a + b·h`` for its hashed ``h`` in [0, 1) (mean 0.7)."""
 MEANDER_M = 1.5

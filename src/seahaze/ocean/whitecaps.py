@@ -77,6 +77,15 @@ Far field
     near and far sea agree; a plane model of the sea gives that fraction the reflectance
     :attr:`FoamField.mean_reflectance` (0.185).
 
+Rendering
+    A renderer draws the foam of fraction ``f`` and reflectance ``R`` as a share
+    ``f·R/R_fresh`` of the surface covered by fresh foam, the water between
+    (:func:`as_fresh_foam`), not as a Lambertian of reflectance ``R`` over all of ``f``. The
+    area mean of the foam albedo is the same, but a fading whitecap is thinning, patchy foam on
+    water whose surface still mirrors the sky: at grazing incidence the water reflects some
+    30 % of a bright sky, more than the residual foam's 0.02–0.06, so a whole patch of dim
+    Lambertian foam would be darker than the water it covers (dark rims around the whitecaps).
+
 Limits: no foam memory (a patch of foam does not drift or decay after the crest has passed),
 no spray in the air (the wind's streaks are :mod:`seahaze.ocean.streaks`, a gale's spindrift
 :mod:`seahaze.ocean.spindrift`, both on the surface), coverage from the wind alone
@@ -371,6 +380,20 @@ class FoamField:
             betas.append(np.minimum(betas[-1], lowpass_weight(level.detail_wavelength_m, spacing)))
         betas.append(np.zeros(shape))
         return [betas[i] - betas[i + 1] for i in range(n)]
+
+
+def as_fresh_foam(
+    fraction: np.ndarray | float, albedo: np.ndarray | float
+) -> tuple[np.ndarray | float, np.ndarray | float]:
+    """Foam of ``fraction`` (0–1) and albedo (fraction × reflectance) as a renderer draws it: a
+    share ``albedo / R_fresh`` of the surface covered by fresh foam
+    (:data:`FRESH_FOAM_REFLECTANCE`), the water between (module docstring, *Rendering*).
+    Returns that share and the fresh reflectance (arrays or scalars, as given)."""
+    share = np.minimum(np.asarray(albedo, dtype=float) / FRESH_FOAM_REFLECTANCE, fraction)
+    reflectance = np.full_like(share, FRESH_FOAM_REFLECTANCE)
+    if np.ndim(share) == 0:
+        return float(share), float(reflectance)
+    return share, reflectance
 
 
 def foam_fraction(

@@ -256,17 +256,17 @@ class LoadedScene:
     for the wind (or the spec's ``sea.roughness``), the far sea's lobe. A model of the sea as a
     plane (the ``physical`` mode's table) reflects with ``water_bsdf_dict(spec, sea_roughness)``."""
     sea_foam_coverage: float = 0.0
-    """Mean fraction (0–1) of the sea surface covered by foam, ``F``: the whitecap coverage
-    law's ``W`` for the wind and the faint residual foam around the counted whitecaps
-    (``FoamField.mean_fraction``, 1.25 ``W``; 0 without whitecaps or on a flat sea). A plane
-    model mixes ``(1 - F)·water + F·Lambertian(sea_foam_reflectance)``."""
+    """Mean share (0–1) of the sea surface covered by foam, ``F``: the fresh foam that gives
+    the whitecaps' mean foam albedo (the coverage law's ``W`` for the wind at Koepke's 0.22 and
+    the faint residual foam around it, over 0.55: 0.42 ``W``; 0 without whitecaps or on a
+    flat sea), with a gale's spindrift and streaks. A plane model mixes
+    ``(1 - F)·water + F·Lambertian(sea_foam_reflectance)``."""
     elapsed_s: float = 0.0
     """Time of this frame after a sequence's first (s; 0 for a still): the sky's clouds drifted
     that long (``render.sky.cloud_layer``)."""
     sea_foam_reflectance: float = FOAM_REFLECTANCE
-    """Mean visible reflectance of that foam, a Lambertian albedo: the foam-weighted mean of the
-    per-vertex foam reflectance (``FoamField.mean_reflectance``, 0.185: Koepke's 0.22 over the
-    counted whitecaps, less over the residual foam)."""
+    """Mean visible reflectance of that foam, a Lambertian albedo: fresh foam's 0.55 (the
+    vertices' own), mixed by area with the streaks' 0.22 where a gale draws them."""
     vessel_faces: dict[int, np.ndarray] = field(default_factory=dict)
     """Shape registry id of each vessel mesh → the vessel index of every face (-1: none)."""
     n_vessels: int = 0
