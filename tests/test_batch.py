@@ -531,3 +531,32 @@ def test_ci_dataset_regenerates_and_validates(tmp_path):
     for path in again.rglob(f"{scene}.*"):
         rel = path.relative_to(again)
         assert path.read_bytes() == (out / rel).read_bytes(), rel
+
+
+@pytest.mark.usefixtures("mitsuba_variant")
+def test_an_in_process_batch_gives_each_scene_once_its_files_are_written(tmp_path):
+    """In one process a scene's files are written while the next scene renders; each outcome
+    still comes in the jobs' order, and only once every file of its scene is on disk (its
+    meta.json is written last), a failed scene in its place between the others."""
+    from conftest import small_spec
+    from seahaze.batch.executors import SceneDone, start_executor
+    from seahaze.batch.plan import SceneJob
+    from seahaze.dataset.layout import Layout
+
+    spec = small_spec(haze={"levels": [1000]}, render={"spp": 1})
+    broken = spec.model_copy(update={"render": spec.render.model_copy(update={"mode": "nope"})})
+    jobs = [
+        SceneJob("s0", spec, "t"),
+        SceneJob("s1", broken, "t"),
+        SceneJob("s2", spec.model_copy(update={"name": "other"}), "t"),
+    ]
+    layout = Layout(tmp_path)
+    seen = []
+    for name, outcome in start_executor(jobs, tmp_path, 1, None, lambda _: None).results():
+        seen.append(name)
+        if name == "s1":
+            assert isinstance(outcome, Exception)
+            continue
+        assert isinstance(outcome, SceneDone) and outcome.timings["total"] > 0.0
+        assert layout.meta(name).is_file() and layout.depth(name).is_file()
+    assert seen == ["s0", "s1", "s2"]

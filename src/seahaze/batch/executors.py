@@ -10,6 +10,7 @@ import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -18,7 +19,7 @@ from ..cpus import render_threads, usable_cpus
 from ..dataset.layout import Layout
 from ..dataset.writer import write_scene
 from ..interrupts import STOP_SIGNALS, WAIT_STEP_S, stoppable
-from ..render.engine import render_scene
+from ..render.engine import SceneRender, render_scene
 from ..spec import SceneSpec
 
 # Reaching a scheduler lives in its own module; the names stay importable from here.
@@ -58,7 +59,13 @@ Outcome = tuple[str, "SceneDone | BaseException"]
 
 class _InProcess:
     """Scenes rendered one after another in this process (``--workers 1``), drjit's pool at
-    ``threads`` threads (None: the CPUs this process may use) while they render."""
+    ``threads`` threads (None: the CPUs this process may use) while they render.
+
+    Each scene's files are written on a second thread while the next scene renders (PNG and
+    EXR compression release the GIL), and its outcome is given once they are all written, so
+    a scene is never recorded done before its files are complete. Stopped during a render, the
+    previous scene's files are finished but it is not recorded: a resumed batch renders it
+    again (the same bytes)."""
 
     def __init__(
         self,
@@ -79,33 +86,41 @@ class _InProcess:
         ignored = signal.getsignal(signal.SIGINT) is signal.SIG_IGN
         self._signals = (signal.SIGTERM,) if ignored else STOP_SIGNALS
         restore = _flag_ignored_sigint(signalled)
+        writing: _Writing | None = None
         try:
             # Threads matched to the CPUs this process may use: drjit's default is every core
             # of the machine, and its kernels wait for their slowest thread.
-            with render_threads(self.threads):
+            with render_threads(self.threads), ThreadPoolExecutor(1) as writer:
                 for job in self.jobs:
                     if self._stop:
-                        return
-                    yield job.name, self._render(job, signalled)
+                        break
+                    start = time.perf_counter()
+                    rendered = self._render(job, signalled)
+                    if writing is not None:  # the previous scene, written meanwhile
+                        yield writing.outcome()
+                        writing = None
+                    if isinstance(rendered, Exception):
+                        yield job.name, rendered
+                    elif not self._stop:  # a stop while the previous scene was recorded
+                        write = writer.submit(_write_timed, self.root, rendered)
+                        writing = _Writing(job.name, rendered.timings, start, write)
+                if writing is not None:
+                    yield writing.outcome()
         finally:
             restore()
 
-    def _render(self, job: SceneJob, signalled: threading.Event) -> SceneDone | Exception:
+    def _render(self, job: SceneJob, signalled: threading.Event) -> SceneRender | Exception:
         for _attempt in range(3):
             signalled.clear()
-            start = time.perf_counter()
             try:
                 with stoppable(self.tick, self._signals):
                     scene = render_scene(job.spec, job.name, self.note, job.frame)
-                # Files are written only after the whole scene rendered, so a render cut short
-                # by an ignored SIGINT never reaches the folder.
-                if not signalled.is_set():
-                    write_scene(Layout(self.root), scene)
             except Exception as err:  # a scene's failure is recorded, not raised
                 return err
+            # Files are written only after the whole scene rendered, so a render cut short
+            # by an ignored SIGINT never reaches the folder.
             if not signalled.is_set():
-                scene.timings["total"] = time.perf_counter() - start
-                return SceneDone(job.name, scene.timings)
+                return scene
             self.note(f"{job.name}: SIGINT (ignored) may have cut a render short; again")
         return RuntimeError("repeated SIGINT while rendering; rerun to render this scene")
 
@@ -117,6 +132,32 @@ class _InProcess:
 
     def close(self) -> None:
         pass
+
+
+@dataclass
+class _Writing:
+    """A rendered scene whose files a writer thread is writing."""
+
+    name: str
+    timings: dict[str, float]
+    start: float
+    write: Future[float]
+
+    def outcome(self) -> Outcome:
+        """Once its files are written: the scene done (``total`` from its render's start to
+        its last file), or the write's error."""
+        try:
+            finished = self.write.result()
+        except Exception as err:  # a scene's failure is recorded, not raised
+            return self.name, err
+        self.timings["total"] = finished - self.start
+        return self.name, SceneDone(self.name, self.timings)
+
+
+def _write_timed(root: Path, scene: SceneRender) -> float:
+    """Write ``scene``'s files under ``root``; returns when they were done (``perf_counter``)."""
+    write_scene(Layout(root), scene)
+    return time.perf_counter()
 
 
 def _flag_ignored_sigint(signalled: threading.Event) -> Callable[[], None]:
