@@ -7,7 +7,7 @@ references) and by ``physical`` (2^20-photon tables, four sampler seeds at 256 s
 the scene's ``sun.scale`` and ``sky.scale`` replaced by ``--sun`` and ``--sky`` and ``haze.g`` by
 ``--g`` (and the camera's heading by ``--heading``: 150° looks toward the sun; the sky by
 ``--sky-model``, e.g. ``overcast`` or ``broken`` with ``--cloud-seed`` choosing its cloud layer,
-and the sun's elevation by ``--sun-elevation``); then both
+and the sun's elevation by ``--sun-elevation``, the wind by ``--wind``); then both
 without haze. It prints, per region (sea, sky, all vessels, and each of the
 first three vessels), the relative difference of the region means, physical against volpath,
 ± the volpath mean's standard error (from its batches).
@@ -30,7 +30,7 @@ camera looks up or down steeply (the haze's light from directions a level view n
 samples), and ``--bands N`` splits sky and sea into N row bands.
 
 Usage: python scripts/compare_components.py V [--batches 8] [--g 0.75] [--sun 1] [--sky 1]
-       [--sky-model clear|broken|overcast] [--cloud-seed N] [--sun-elevation DEG]
+       [--sky-model clear|broken|overcast] [--cloud-seed N] [--sun-elevation DEG] [--wind M/S]
        [--heading DEG] [--pitch DEG] [--fov DEG] [--bands N] [--vessel-light SHARE]
        [--fog-layer TOP,EDGE,ABOVE] [--height M] [--patches C,A,V,R] [--bank D,B,E,N]
        [--cache DIR]
@@ -102,6 +102,9 @@ def main() -> None:
     )
     parser.add_argument("--sun-elevation", type=float, default=None, help="sun.elevation_deg")
     parser.add_argument(
+        "--wind", type=float, default=None, help="sea.wind_speed (m/s), e.g. 19 for a gale's foam"
+    )
+    parser.add_argument(
         "--heading", type=float, default=None, help="camera.heading_deg (default: the scene's)"
     )
     parser.add_argument("--height", type=float, default=None, help="camera.height_m")
@@ -148,6 +151,8 @@ def main() -> None:
         changes["sky"]["clouds"] = {"seed": args.cloud_seed}
     if args.sun_elevation is not None:
         changes["sun"]["elevation_deg"] = args.sun_elevation
+    if args.wind is not None:
+        changes["sea"] = {"wind_speed": args.wind}
     if args.g is not None:
         changes["haze"] = {"g": args.g}
     if args.fog_layer is not None:
