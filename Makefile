@@ -2,8 +2,8 @@
 #   make render   render scenes/default.yaml clean + 11 visibility levels into out/default
 #   make test     run the test suite (two pytest-xdist workers: most of its time is LLVM compiling
 #                 kernels on one thread, so a second worker overlaps it; 515 s for 2558 tests
-#                 from a fresh clone with an empty kernel cache on a 2-vCPU machine:
-#                 scripts/bench_suite.py)
+#                 from a fresh clone with an empty kernel cache on a 2-vCPU machine, 775 s for
+#                 2579 on a 1.5x slower one: scripts/bench_suite.py)
 VENV  := .venv
 STAMP := $(VENV)/.seahaze-installed
 OUT   ?= out/default
