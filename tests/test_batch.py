@@ -551,7 +551,8 @@ def test_an_in_process_batch_gives_each_scene_once_its_files_are_written(tmp_pat
         SceneJob("s2", spec.model_copy(update={"name": "other"}), "t"),
     ]
     layout = Layout(tmp_path)
-    seen = []
+    seen, totals = [], []
+    start = time.perf_counter()
     for name, outcome in start_executor(jobs, tmp_path, 1, None, lambda _: None).results():
         seen.append(name)
         if name == "s1":
@@ -559,4 +560,7 @@ def test_an_in_process_batch_gives_each_scene_once_its_files_are_written(tmp_pat
             continue
         assert isinstance(outcome, SceneDone) and outcome.timings["total"] > 0.0
         assert layout.meta(name).is_file() and layout.depth(name).is_file()
+        totals.append(outcome.timings["total"])
     assert seen == ["s0", "s1", "s2"]
+    # A scene's total is its share of the batch's time: the totals never add up to more.
+    assert sum(totals) < time.perf_counter() - start

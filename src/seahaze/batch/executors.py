@@ -102,8 +102,9 @@ class _InProcess:
                     if isinstance(rendered, Exception):
                         yield job.name, rendered
                     elif not self._stop:  # a stop while the previous scene was recorded
-                        write = writer.submit(_write_timed, self.root, rendered)
-                        writing = _Writing(job.name, rendered.timings, start, write)
+                        write = writer.submit(write_scene, Layout(self.root), rendered)
+                        rendered_s = time.perf_counter() - start
+                        writing = _Writing(job.name, rendered.timings, rendered_s, write)
                 if writing is not None:
                     yield writing.outcome()
         finally:
@@ -140,24 +141,22 @@ class _Writing:
 
     name: str
     timings: dict[str, float]
-    start: float
-    write: Future[float]
+    rendered_s: float
+    """Seconds its render took."""
+    write: Future[None]
 
     def outcome(self) -> Outcome:
-        """Once its files are written: the scene done (``total`` from its render's start to
-        its last file), or the write's error."""
+        """Once its files are written: the scene done, or the write's error. Its ``total`` is
+        the batch's time it took: its render and the wait for its files once the next scene
+        had rendered (all of the writing for the last scene), so the totals of a batch add up
+        to its wall time, start-up and the record kept between scenes aside."""
+        waiting = time.perf_counter()
         try:
-            finished = self.write.result()
+            self.write.result()
         except Exception as err:  # a scene's failure is recorded, not raised
             return self.name, err
-        self.timings["total"] = finished - self.start
+        self.timings["total"] = self.rendered_s + time.perf_counter() - waiting
         return self.name, SceneDone(self.name, self.timings)
-
-
-def _write_timed(root: Path, scene: SceneRender) -> float:
-    """Write ``scene``'s files under ``root``; returns when they were done (``perf_counter``)."""
-    write_scene(Layout(root), scene)
-    return time.perf_counter()
 
 
 def _flag_ignored_sigint(signalled: threading.Event) -> Callable[[], None]:
