@@ -28,8 +28,8 @@ from seahaze.ocean.spindrift import (
     Spindrift,
     mean_source,
     spindrift_opacity,
-    under_veil,
 )
+from seahaze.ocean.whitecaps import layer_over
 
 
 @pytest.fixture(scope="module")
@@ -102,7 +102,9 @@ def test_the_veil_lies_downwind_of_its_crests(gale):
 
 
 def test_a_veil_hides_what_it_covers():
-    fraction, albedo = under_veil(np.array([0.0, 0.5, 1.0]), np.array([0.0, 0.1, 0.55]), 0.4)
+    fraction, albedo = layer_over(
+        np.array([0.0, 0.5, 1.0]), np.array([0.0, 0.1, 0.55]), 0.4, SPRAY_REFLECTANCE
+    )
     # The surface shows through 1 - v, the veil reflects v·R_s on top.
     assert np.allclose(fraction, [0.4, 0.7, 1.0])
     assert np.allclose(albedo, [0.4 * SPRAY_REFLECTANCE, 0.06 + 0.4 * SPRAY_REFLECTANCE, 0.55])
@@ -122,7 +124,7 @@ def test_the_sea_takes_spindrift_from_force_8(force):
     assert spindrift.present == (force == 8)
     # The plane model of the sea: the whitecaps' mean albedo seen through the veil's mean,
     # drawn as a share of fresh foam.
-    albedo = under_veil(foam.mean_fraction, foam.albedo, spindrift.mean_veil)[1]
+    albedo = layer_over(foam.mean_fraction, foam.albedo, spindrift.mean_veil, SPRAY_REFLECTANCE)[1]
     assert sea.foam_reflectance == ocean.FRESH_FOAM_REFLECTANCE
     assert sea.foam_coverage * sea.foam_reflectance == pytest.approx(albedo, rel=1e-12)
     if force == 7:  # no spindrift: the whitecaps' own albedo, to the bit

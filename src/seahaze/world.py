@@ -244,7 +244,8 @@ def build_sea(
         return Sea(sea, roughness, surface, near)
     coverage, albedo = foam.mean_fraction, foam.albedo
     if spindrift is not None and spindrift.present:
-        coverage, albedo = ocean.under_veil(coverage, albedo, spindrift.mean_veil)
+        veil = spindrift.mean_veil
+        coverage, albedo = ocean.layer_over(coverage, albedo, veil, ocean.SPRAY_REFLECTANCE)
     share, reflectance = ocean.as_fresh_foam(coverage, albedo)
     return Sea(sea, roughness, surface, near, share, reflectance)
 

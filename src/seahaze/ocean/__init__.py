@@ -50,7 +50,7 @@ from .gerstner import GerstnerOcean
 from .kelvin import transverse_wavelength
 from .mesh import SeaMesh, build_sea_mesh, build_sea_mesh_data, horizon_gap_angle
 from .spectra import SeaSpectrum
-from .spindrift import Spindrift, spindrift_opacity, under_veil
+from .spindrift import SPRAY_REFLECTANCE, Spindrift, spindrift_opacity
 from .surface import make_surface
 from .wake import MovingVessel, ShipWaves, WakeField, wake_foam, wake_height
 from .whitecaps import (
@@ -59,6 +59,7 @@ from .whitecaps import (
     FoamField,
     as_fresh_foam,
     foam_fraction,
+    layer_over,
     whitecap_albedo,
     whitecap_coverage,
 )
@@ -67,6 +68,7 @@ __all__ = [
     "BEAUFORT_SCALE",
     "FOAM_REFLECTANCE",
     "FRESH_FOAM_REFLECTANCE",
+    "SPRAY_REFLECTANCE",
     "BeaufortForce",
     "ChoppinessClampedWarning",
     "FFTCascade",
@@ -99,6 +101,7 @@ __all__ = [
     "height_at",
     "horizon_gap_angle",
     "invert_horizontal_displacement",
+    "layer_over",
     "make_surface",
     "mean_square_slope",
     "mesh_roughness",
@@ -107,7 +110,6 @@ __all__ = [
     "spindrift_opacity",
     "sub_grid_roughness",
     "transverse_wavelength",
-    "under_veil",
     "wake_foam",
     "wake_height",
     "whitecap_albedo",

@@ -81,8 +81,8 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from .base import OceanSurface, cell_samples, smoothstep
-from .spindrift import under_veil
-from .whitecaps import FRESH_FOAM_REFLECTANCE, as_fresh_foam
+from .spindrift import SPRAY_REFLECTANCE
+from .whitecaps import as_fresh_foam, layer_over
 
 if TYPE_CHECKING:
     from .spindrift import Spindrift
@@ -333,7 +333,7 @@ def build_sea_mesh_data(
             and wakes only where they can be seen (module docstring); None: everywhere.
         spindrift: the gale's spray veil over ``foam``
             (:class:`~seahaze.ocean.spindrift.Spindrift`), if any: joins the foam layer
-            (:func:`~seahaze.ocean.spindrift.under_veil`), its mean where nobody looks.
+            (:func:`~seahaze.ocean.whitecaps.layer_over`), its mean where nobody looks.
     """
     if quality not in QUALITY_PRESETS:
         raise ValueError(f"quality must be one of {sorted(QUALITY_PRESETS)}, got {quality!r}")
@@ -375,7 +375,7 @@ def build_sea_mesh_data(
     if spindrift is not None and spindrift.present:
         veil = np.full_like(x, spindrift.mean_veil)
         veil[seen] = spindrift.veil(x[seen], y[seen], spacing[seen])
-        foam_values, foam_albedo = under_veil(foam_values, foam_albedo, veil)
+        foam_values, foam_albedo = layer_over(foam_values, foam_albedo, veil, SPRAY_REFLECTANCE)
     weight = displacement_fade(r, fade_start, fade_end) * (1.0 if detail is None else detail)
     displaced = np.nonzero(weight > 0.0)[0]
     if displaced.size:
@@ -389,8 +389,7 @@ def build_sea_mesh_data(
         wake_foam = np.zeros_like(x)
         wake_foam[seen] = wakes.foam_averaged(x[seen], y[seen], *cells[2:])
         # Where both overlap the wake's fresh foam lies on top of the whitecap.
-        foam_albedo = foam_albedo * (1.0 - wake_foam) + wake_foam * FRESH_FOAM_REFLECTANCE
-        foam_values = 1.0 - (1.0 - foam_values) * (1.0 - wake_foam)
+        foam_values, foam_albedo = layer_over(foam_values, foam_albedo, wake_foam)
     foam_values, reflectance = as_fresh_foam(foam_values, foam_albedo)
 
     vertices = np.stack([x, y, z], axis=1).astype(np.float32)

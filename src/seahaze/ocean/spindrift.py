@@ -39,9 +39,10 @@ How it is rendered
     As a veil lying on the water: the surface under it is seen through ``1 − v`` and the veil
     reflects ``v·R_s``, ``R_s`` = :data:`SPRAY_REFLECTANCE` (a dense cloud of droplets seen
     obliquely is as white as fresh foam). In the sea mesh it joins the foam layer as the
-    wakes' foam does (:func:`under_veil`: foam fraction ``1 − (1 − f)(1 − v)``, foam albedo
-    ``a·(1 − v) + v·R_s``), so it costs the render nothing; a model of the sea as a plane
-    takes its mean (:attr:`Spindrift.mean_veil`) the same way.
+    wakes' foam does (:func:`~seahaze.ocean.whitecaps.layer_over` with ``R_s``: foam fraction
+    ``1 − (1 − f)(1 − v)``, foam albedo ``a·(1 − v) + v·R_s``), so it costs the render
+    nothing; a model of the sea as a plane takes its mean (:attr:`Spindrift.mean_veil`) the
+    same way.
 
 Limits: the veil has no height (the metre or so it rises above a crest casts no shadow and
 shows no parallax), no drops fly above the surface's silhouette, and it follows its crest
@@ -101,15 +102,6 @@ def young_foam(fraction: np.ndarray, reflectance: np.ndarray) -> np.ndarray:
     reflectance = np.clip(reflectance, 1e-12, FRESH_FOAM_REFLECTANCE)
     age = np.log(FRESH_FOAM_REFLECTANCE / reflectance) / FOAM_AGE_DECAY
     return fraction * np.clip(1.0 - age / YOUNG_SHARE, 0.0, 1.0)
-
-
-def under_veil(
-    fraction: np.ndarray | float, albedo: np.ndarray | float, veil: np.ndarray | float
-) -> tuple[np.ndarray | float, np.ndarray | float]:
-    """Foam ``fraction`` (0–1) and foam ``albedo`` (fraction × reflectance) of a surface seen
-    through a spray veil of opacity ``veil`` (0–1): ``1 − (1 − f)(1 − v)`` and
-    ``a·(1 − v) + v·R_s``. Arrays or scalars (a mesh's vertices, or a plane's means)."""
-    return 1.0 - (1.0 - fraction) * (1.0 - veil), albedo * (1.0 - veil) + veil * SPRAY_REFLECTANCE
 
 
 @dataclass(frozen=True)

@@ -382,6 +382,19 @@ class FoamField:
         return [betas[i] - betas[i + 1] for i in range(n)]
 
 
+def layer_over(
+    fraction: np.ndarray | float,
+    albedo: np.ndarray | float,
+    cover: np.ndarray | float,
+    reflectance: float = FRESH_FOAM_REFLECTANCE,
+) -> tuple[np.ndarray | float, np.ndarray | float]:
+    """Foam ``fraction`` (0–1) and foam ``albedo`` (fraction × reflectance) of a surface under a
+    layer that covers a share ``cover`` (0–1) of it with ``reflectance`` (a wake's fresh foam,
+    a gale's spray veil), the two independent: ``1 − (1 − f)(1 − c)`` and ``a·(1 − c) + c·R``.
+    Arrays or scalars (a mesh's vertices, or a plane's means)."""
+    return 1.0 - (1.0 - fraction) * (1.0 - cover), albedo * (1.0 - cover) + cover * reflectance
+
+
 def as_fresh_foam(
     fraction: np.ndarray | float, albedo: np.ndarray | float
 ) -> tuple[np.ndarray | float, np.ndarray | float]:
