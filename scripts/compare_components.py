@@ -6,7 +6,8 @@ The benchmark scene (``scenes/benchmark.yaml``, 80×45) is rendered at visibilit
 references) and by ``physical`` (2^20-photon tables, four sampler seeds at 256 spp), both with
 the scene's ``sun.scale`` and ``sky.scale`` replaced by ``--sun`` and ``--sky`` and ``haze.g`` by
 ``--g`` (and the camera's heading by ``--heading``: 150° looks toward the sun; the sky by
-``--sky-model``, e.g. ``overcast`` or ``broken`` with ``--cloud-seed`` choosing its cloud layer,
+``--sky-model``, e.g. ``overcast``, ``twilight`` (with a sun below the horizon) or ``broken``
+with ``--cloud-seed`` choosing its cloud layer,
 and the sun's elevation by ``--sun-elevation``, the wind by ``--wind``); then both
 without haze. It prints, per region (sea, sky, all vessels, and each of the
 first three vessels), the relative difference of the region means, physical against volpath,
@@ -30,8 +31,8 @@ camera looks up or down steeply (the haze's light from directions a level view n
 samples), and ``--bands N`` splits sky and sea into N row bands.
 
 Usage: python scripts/compare_components.py V [--batches 8] [--g 0.75] [--sun 1] [--sky 1]
-       [--sky-model clear|broken|overcast] [--cloud-seed N] [--sun-elevation DEG] [--wind M/S]
-       [--heading DEG] [--pitch DEG] [--fov DEG] [--bands N] [--vessel-light SHARE]
+       [--sky-model clear|broken|overcast|twilight] [--cloud-seed N] [--sun-elevation DEG]
+       [--wind M/S] [--heading DEG] [--pitch DEG] [--fov DEG] [--bands N] [--vessel-light SHARE]
        [--fog-layer TOP,EDGE,ABOVE] [--height M] [--patches C,A,V,R] [--bank D,B,E,N]
        [--cache DIR]
 """
@@ -95,7 +96,10 @@ def main() -> None:
     parser.add_argument("--sun", type=float, default=1.0, help="sun.scale")
     parser.add_argument("--sky", type=float, default=1.0, help="sky.scale")
     parser.add_argument(
-        "--sky-model", choices=("clear", "broken", "overcast"), default=None, help="sky.model"
+        "--sky-model",
+        choices=("clear", "broken", "overcast", "twilight"),
+        default=None,
+        help="sky.model",
     )
     parser.add_argument(
         "--cloud-seed", type=int, default=None, help="sky.clouds.seed of a broken sky"

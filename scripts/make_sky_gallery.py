@@ -1,10 +1,11 @@
 """Render the gallery of skies: docs/images/sky_gallery.png.
 
-The default scene (``scenes/default.yaml``) under four skies: clear with the sun at 28° (the
+The default scene (``scenes/default.yaml``) under five skies: clear with the sun at 28° (the
 scene as written), clear with a low sun at 5° (dawn or dusk light), broken cloud
-(``sky.model: broken``, ``scenes/broken_cloud.yaml``'s sky) and overcast (``sky.model:
-overcast``, ``scenes/overcast.yaml``'s sky). Each row holds the clean image and
-the levels 2000 m and 500 m, rendered in the ``physical`` mode through
+(``sky.model: broken``, ``scenes/broken_cloud.yaml``'s sky), overcast (``sky.model:
+overcast``, ``scenes/overcast.yaml``'s sky) and twilight (``sky.model: twilight``, the sun 3°
+below the horizon ahead and to the right, ``scenes/twilight.yaml``'s). Each row holds the
+clean image and the levels 2000 m and 500 m, rendered in the ``physical`` mode through
 :func:`seahaze.render.engine.render_scene` and shown at the scene's own exposure, as the
 dataset's PNGs are. Deterministic: fixed seeds, the same pixels on the same machine and Mitsuba
 variant.
@@ -32,6 +33,10 @@ SKIES = {
         "sky": {"model": "broken", "clouds": {"oktas": 5, "base_height_m": 900}}
     },
     "overcast": {"sky": {"model": "overcast"}},
+    "twilight, sun 3° below": {
+        "sun": {"elevation_deg": -3.0, "azimuth_deg": -25.0},
+        "sky": {"model": "twilight"},
+    },
 }
 """Each row's changes to the default scene."""
 

@@ -145,14 +145,22 @@ class CameraSpec(_Spec):
         return data
 
 
+TWILIGHT_SUN_DEG = (-6.0, 0.0)
+"""Sun elevations of a `twilight` sky (deg): from sunset to the end of civil twilight."""
+DAYLIGHT_SUN_DEG = (0.5, 89.5)
+"""Sun elevations of the daylight skies (deg), where the Hosek–Wilkie model holds."""
+
+
 class SunSpec(_Spec):
-    """The sun of the Hosek–Wilkie sun-and-sky model."""
+    """The sun: the Hosek–Wilkie sun-and-sky model's by day, set below the horizon under a
+    `twilight` sky."""
 
     elevation_deg: float = Field(
         25.0,
-        ge=0.5,
+        ge=TWILIGHT_SUN_DEG[0],
         le=89.5,
-        description="Sun elevation above the horizon.",
+        description="Sun elevation above the horizon: 0.5..89.5 under a clear, broken or "
+        "overcast sky; -6..0 (the sun set, civil twilight) under a `twilight` sky.",
         json_schema_extra=_unit("deg"),
     )
     azimuth_deg: float = Field(
@@ -206,9 +214,10 @@ class CloudSpec(_Spec):
 
 class SkySpec(_Spec):
     """The sky above the haze layer: clear (Hosek & Wilkie 2012, Mitsuba `sunsky`), broken
-    cloud (seahaze.clouds) or overcast (the CIE overcast sky, :mod:`seahaze.overcast`)."""
+    cloud (seahaze.clouds), overcast (the CIE overcast sky, :mod:`seahaze.overcast`) or the
+    clear sky after sunset (:mod:`seahaze.twilight`)."""
 
-    model: Literal["clear", "broken", "overcast"] = Field(
+    model: Literal["clear", "broken", "overcast", "twilight"] = Field(
         "clear",
         description="`clear`: the Hosek–Wilkie sun and sky. `broken`: the clear sky with a "
         "layer of cloud (`clouds`) that hides the sun when one lies in its direction; the "
@@ -217,7 +226,9 @@ class SkySpec(_Spec):
         "hides the sun; the CIE overcast sky (radiance a third of the zenith's at the "
         "horizon, grey), as bright as the quarter of the clear sky's global irradiance at "
         "the same sun elevation and turbidity that cloud lets through (Kasten & Czeplak "
-        "1980). The sun's elevation still sets how bright the day is.",
+        "1980). The sun's elevation still sets how bright the day is. `twilight`: the clear "
+        "sky after sunset (`sun.elevation_deg` -6..0), sunlight scattered in the air above "
+        "the Earth's shadow (seahaze.twilight), no sun.",
     )
     clouds: CloudSpec | None = Field(
         None,
@@ -1435,6 +1446,26 @@ class SceneSpec(_Spec):
         """Whether this scene, or a scene of a batch drawn from it, has a broken sky."""
         drawn = self.variation.sky_models
         return self.sky.model == "broken" or (drawn is not None and "broken" in drawn)
+
+    @model_validator(mode="after")
+    def _sun_fits_the_sky(self) -> SceneSpec:
+        # Hosek–Wilkie holds for a sun above the horizon only; the twilight model for one
+        # below it. A batch varies daytime suns and skies, which a twilight scene has not.
+        elevation, model = self.sun.elevation_deg, self.sky.model
+        low, high = TWILIGHT_SUN_DEG if model == "twilight" else DAYLIGHT_SUN_DEG
+        if not low <= elevation <= high:
+            other = "clear, broken or overcast" if model == "twilight" else "twilight"
+            raise ValueError(
+                f"sun.elevation_deg {elevation:g}: a '{model}' sky takes {low:g}..{high:g} deg; "
+                f"for this sun set sky.model to {other}"
+            )
+        varied = [k for k in ("sun_elevation_deg", "sky_models") if getattr(self.variation, k)]
+        if model == "twilight" and varied:
+            raise ValueError(
+                f"variation.{varied[0]}: a batch varies daylight suns and skies, not a "
+                "`twilight` sky's; remove it or use a daylight sky.model"
+            )
+        return self
 
     @model_validator(mode="after")
     def _cloud_variation_needs_clouds(self) -> SceneSpec:

@@ -1,11 +1,13 @@
-"""The lights of a scene as Mitsuba emitters: the sun and the sky, clear, broken or overcast.
+"""The lights of a scene as Mitsuba emitters: the sun and the sky, clear, broken, overcast or
+at twilight.
 
 A clear day is Mitsuba's Hosek–Wilkie ``sunsky``. An overcast day has no sun to see: its sky
 is the CIE overcast sky (:mod:`seahaze.overcast`) as an ``envmap``, grey, as bright as the
 light a full cloud deck lets through of the clear day's (measured on the clear ``sunsky`` of
 the same sun and turbidity, :func:`clear_global_irradiance`). A day of broken cloud
 (:mod:`seahaze.clouds`) has both: an ``envmap`` of the clear sky with clouds of the overcast
-deck's gradation in it, and the sun, passed or hidden by the cloud in its direction. The
+deck's gradation in it, and the sun, passed or hidden by the cloud in its direction. At
+twilight the sun has set: the sky is :mod:`seahaze.twilight`'s, as an ``envmap``. The
 ``physical`` mode takes the sun and the sky apart (:func:`sun_and_sky_dicts`); the other modes'
 scenes hold the emitters of :func:`sky_emitters`, where a clear day's sky carries the sun too.
 """
@@ -16,9 +18,9 @@ from functools import cache, lru_cache
 
 import numpy as np
 
-from .. import clouds, overcast
+from .. import clouds, overcast, twilight
 from ..seeds import Stream, stream_seed
-from ..spec import SceneSpec, SkySpec, SunSpec
+from ..spec import DAYLIGHT_SUN_DEG, SceneSpec, SkySpec, SunSpec
 from ..world import sun_direction, wind_speed
 
 IRRADIANCE_SAMPLES = 1 << 16
@@ -80,7 +82,7 @@ def sky_emitters(spec: SceneSpec, elapsed_s: float = 0.0) -> dict[str, dict]:
     if spec.sky.model == "clear":
         return {"sky": sunsky_dict(spec)}
     sun, sky = sun_and_sky_dicts(spec, elapsed_s)
-    if spec.sky.model == "overcast":
+    if spec.sky.model in ("overcast", "twilight"):
         return {"sky": sky}
     return {"sky": sky, "sun": _directional_sun(sun)}
 
@@ -106,6 +108,12 @@ def sun_and_sky_dicts(spec: SceneSpec, elapsed_s: float = 0.0) -> tuple[dict, di
     drifted for ``elapsed_s`` (s)."""
     if spec.sky.model == "overcast":
         return sunsky_dict(spec, sun=False, sky=False), overcast_dict(spec)
+    if spec.sky.model == "twilight":
+        # The set sun is switched off, so its direction is never seen; it stands at the
+        # horizon, where Mitsuba's sunsky does not warn of a sun below it.
+        low, sky = DAYLIGHT_SUN_DEG[0], spec.sky
+        off = _sunsky(low, spec.sun.azimuth_deg, sky.turbidity, sky.ground_albedo, 0.0, 0.0)
+        return off, twilight_dict(spec)
     if spec.sky.model == "broken":
         layer = cloud_layer(spec, elapsed_s)
         sun = sunsky_dict(spec, sky=False)
@@ -194,6 +202,43 @@ def overcast_dict(spec: SceneSpec) -> dict:
     )
     zenith = overcast.zenith_radiance(clear) * spec.sky.scale
     return _envmap(mi.Bitmap(overcast.latlong_radiance(zenith, ENVMAP_ROWS)))
+
+
+def twilight_dict(spec: SceneSpec) -> dict:
+    """The twilight sky of ``spec`` (the sun below the horizon) as an ``envmap``: the
+    single-scattering sky of :mod:`seahaze.twilight` at each texel's direction, in the
+    renderer's units (:func:`twilight_scale`), scaled by ``sky.scale``."""
+    import mitsuba as mi
+
+    image = _twilight_image(spec.sun.elevation_deg, spec.sun.azimuth_deg, spec.sky.turbidity)
+    scale = twilight_scale(spec.sky.turbidity, spec.sky.ground_albedo) * spec.sky.scale
+    return _envmap(mi.Bitmap((image * scale).astype(np.float32)))
+
+
+@lru_cache(maxsize=2)
+def _twilight_image(elevation_deg: float, azimuth_deg: float, turbidity: float) -> np.ndarray:
+    """The twilight sky's latitude–longitude image in the model's units, negative (out of
+    sRGB's gamut: the deepest red at the horizon) clipped to 0."""
+    directions = clouds.latlong_directions(ENVMAP_ROWS, 2 * ENVMAP_ROWS)
+    elevation = np.arcsin(np.clip(directions[..., 2], -1.0, 1.0))
+    relative = np.arctan2(directions[..., 1], directions[..., 0]) - np.radians(azimuth_deg)
+    sky = twilight.sky_grid(elevation_deg, turbidity)
+    return np.maximum(sky.radiance(elevation, relative), 0.0)
+
+
+@cache
+def twilight_scale(turbidity: float, ground_albedo: float) -> float:
+    """The renderer's units per unit of :mod:`seahaze.twilight`'s radiance: the factor that
+    gives its sky, with the sun at Hosek–Wilkie's lowest (0.5°), the clear ``sunsky``'s sky
+    luminance on a level surface there, so that dusk follows the day without a jump."""
+    import mitsuba as mi
+
+    low = DAYLIGHT_SUN_DEG[0]
+    clear = horizontal_irradiance(
+        mi.load_dict(_sunsky(low, 0.0, turbidity, ground_albedo, 0.0, 1.0))
+    )
+    model = twilight.sky_grid(low, turbidity).horizontal_irradiance()
+    return float(overcast.REC709_LUMINANCE @ clear / (overcast.REC709_LUMINANCE @ model))
 
 
 ILLUMINANT_GRID = 128
