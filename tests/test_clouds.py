@@ -164,13 +164,13 @@ def test_the_envmap_holds_the_image_with_its_zenith_up_and_azimuth_from_y_to_x(
 
 
 def test_a_hidden_sun_is_dark_and_an_out_sun_is_the_clear_days(mitsuba_variant):
-    from seahaze.render.sky import cloud_layer, sky_emitters, sun_and_sky_dicts
+    from seahaze.render.sky import cloud_layer, sky_emitters, sun_dict
     from seahaze.world import sun_direction
 
     outcomes = {}
     for seed in range(12):
         spec = broken_spec(seed)
-        sun, _ = sun_and_sky_dicts(spec)
+        sun = sun_dict(spec)
         passed = cloud_layer(spec).sun_transmission(
             sun_direction(spec.sun.elevation_deg, spec.sun.azimuth_deg)
         )
@@ -307,7 +307,7 @@ def test_a_drifted_layer_is_the_same_layer_moved():
 
 def test_a_sequence_frame_drifts_its_clouds_with_the_wind_aloft(mitsuba_variant):
     from seahaze.render.engine import open_session
-    from seahaze.render.sky import cloud_layer, sun_and_sky_dicts
+    from seahaze.render.sky import cloud_layer, sun_dict
     from seahaze.spec import with_changes, with_overrides
     from seahaze.world import sun_direction
 
@@ -321,7 +321,7 @@ def test_a_sequence_frame_drifts_its_clouds_with_the_wind_aloft(mitsuba_variant)
     passes = [cloud_layer(spec, t).sun_transmission(sun) for t in (0.0, 30.0, 60.0, 90.0, 120.0)]
     assert max(passes) - min(passes) > 0.5, passes  # a cloud crosses the sun in two minutes
     t = 30.0 * int(np.argmin(passes))
-    assert sun_and_sky_dicts(spec, t)[0]["sun_scale"] == pytest.approx(min(passes))
+    assert sun_dict(spec, t)["sun_scale"] == pytest.approx(min(passes))
     # A frame of a sequence renders its own time's clouds.
     sequence = with_changes(spec, {"sequence": {"frames": 5, "fps": 1.0 / 30.0}})
     small = with_overrides(sequence, resolution=(48, 27), spp=1, levels=[2000.0])

@@ -102,26 +102,43 @@ def _directional_sun(sun_dict: dict) -> dict:
 
 
 def sun_and_sky_dicts(spec: SceneSpec, elapsed_s: float = 0.0) -> tuple[dict, dict]:
-    """The sun alone and the sky alone (the ``physical`` mode samples the sun on its own). An
-    overcast day's sun is a ``sunsky`` with both parts off: it adds nothing; a broken sky's
-    sun is scaled by the share of its beam the cloud in its direction passes, its clouds
-    drifted for ``elapsed_s`` (s)."""
-    if spec.sky.model == "overcast":
-        return sunsky_dict(spec, sun=False, sky=False), overcast_dict(spec)
-    if spec.sky.model == "twilight":
+    """The sun alone (:func:`sun_dict`) and the sky alone (:func:`sky_dict`): the ``physical``
+    mode samples the sun on its own."""
+    return sun_dict(spec, elapsed_s), sky_dict(spec, elapsed_s)
+
+
+def sun_dict(spec: SceneSpec, elapsed_s: float = 0.0) -> dict:
+    """The sun alone, a ``sunsky`` with its sky off. An overcast day's and a twilight's have
+    their sun off too: they add nothing; a broken sky's is scaled by the share of its beam the
+    cloud in its direction passes, its clouds drifted for ``elapsed_s`` (s)."""
+    model = spec.sky.model
+    if model == "overcast":
+        return sunsky_dict(spec, sun=False, sky=False)
+    if model == "twilight":
         # The set sun is switched off, so its direction is never seen; it stands at the
         # horizon, where Mitsuba's sunsky does not warn of a sun below it.
         low, sky = DAYLIGHT_SUN_DEG[0], spec.sky
-        off = _sunsky(low, spec.sun.azimuth_deg, sky.turbidity, sky.ground_albedo, 0.0, 0.0)
-        return off, twilight_dict(spec)
-    if spec.sky.model == "broken":
-        layer = cloud_layer(spec, elapsed_s)
-        sun = sunsky_dict(spec, sky=False)
-        sun["sun_scale"] *= layer.sun_transmission(
+        return _sunsky(low, spec.sun.azimuth_deg, sky.turbidity, sky.ground_albedo, 0.0, 0.0)
+    sun = sunsky_dict(spec, sky=False)
+    if model == "broken":
+        sun["sun_scale"] *= cloud_layer(spec, elapsed_s).sun_transmission(
             sun_direction(spec.sun.elevation_deg, spec.sun.azimuth_deg)
         )
-        return sun, broken_dict(spec, layer)
-    return sunsky_dict(spec, sky=False), sunsky_dict(spec, sun=False)
+    return sun
+
+
+def sky_dict(spec: SceneSpec, elapsed_s: float = 0.0) -> dict:
+    """The sky alone: the clear ``sunsky``'s with its sun off, or the ``envmap`` of an overcast
+    (:func:`overcast_dict`), broken (:func:`broken_dict`, its clouds drifted for
+    ``elapsed_s`` s) or twilight (:func:`twilight_dict`) sky."""
+    model = spec.sky.model
+    if model == "overcast":
+        return overcast_dict(spec)
+    if model == "twilight":
+        return twilight_dict(spec)
+    if model == "broken":
+        return broken_dict(spec, cloud_layer(spec, elapsed_s))
+    return sunsky_dict(spec, sun=False)
 
 
 def cloud_layer(spec: SceneSpec, elapsed_s: float = 0.0) -> clouds.CloudLayer:
