@@ -26,6 +26,7 @@ def test_the_mirror_image_is_the_sun_reflected_in_the_sea_plane() -> None:
     np.testing.assert_allclose(m, [np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), -np.sin(e)])
     assert glint_lobe.lobe_share(sun, 0.7) == 0.7
     assert glint_lobe.lobe_share(sun_direction(-3.0, 150.0), 0.7) == 0.0
+    assert glint_lobe.lobe_share(sun, 0.7, shining=False) == 0.0
 
 
 def test_kappa_follows_cox_munk() -> None:

@@ -42,10 +42,13 @@ def lobe_kappa(wind_speed: float) -> float:
     return 1.0 / (2.0 * mean_square_slope(wind_speed))
 
 
-def lobe_share(sun_axis: np.ndarray, share: float) -> float:
+def lobe_share(sun_axis: np.ndarray, share: float, shining: bool = True) -> float:
     """The share of directions drawn from the lobe: ``share`` while the sun is above the
-    horizon, 0 when it is not (a sun below the sea plane makes no glint)."""
-    return float(share) if float(sun_axis[2]) > 0.0 else 0.0
+    horizon and ``shining``, 0 when it is not (a sun below the sea plane, switched off under
+    an overcast or twilight sky, or hidden by a cloud makes no glint; drawn toward it, a
+    sun's mirror image near the horizon would send the sea's own facets' paths along the
+    horizon for nothing, and their rare hits make fireflies)."""
+    return float(share) if float(sun_axis[2]) > 0.0 and shining else 0.0
 
 
 def lobe_sample(axis: Any, kappa: Any, u: Any) -> Any:
@@ -68,15 +71,16 @@ class GlintLobe:
     draw from it, the density of their continuation mixture, and the draw itself. Every
     parameter is an opaque drjit value: another sun or sea reuses the compiled kernel."""
 
-    def __init__(self, sun_axis: np.ndarray, wind_speed: float, share: float):
+    def __init__(self, sun_axis: np.ndarray, wind_speed: float, share: float, shining: bool = True):
         """``sun_axis``: unit vector toward the sun; ``wind_speed`` (m/s): the sea's, which
-        sets the lobe's width; ``share``: of a facing surface's next directions."""
+        sets the lobe's width; ``share``: of a facing surface's next directions;
+        ``shining``: whether the sun gives any light (:func:`lobe_share`)."""
         import drjit as dr
         import mitsuba as mi
 
         opaque = lambda x: dr.opaque(mi.Float, float(x))  # noqa: E731
         self.axis = mi.Vector3f(*map(opaque, mirror_axis(sun_axis)))
-        self.share = opaque(lobe_share(sun_axis, share))
+        self.share = opaque(lobe_share(sun_axis, share, shining))
         self.kappa = opaque(lobe_kappa(wind_speed))
 
     def share_at(self, si: Any, bsdf: Any, active: Any) -> Any:

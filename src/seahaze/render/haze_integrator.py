@@ -143,9 +143,12 @@ class HazeIntegrator(mi.SamplingIntegrator):
         cos_max = sun_cone_cos()
         self.sun_cos = opaque_scalar(cos_max)
         self.sun_pdf = opaque_scalar(1.0 / (2.0 * np.pi * (1.0 - cos_max)))
-        self.sun_irradiance = mi.Color3f(*(opaque_scalar(c) for c in disk_irradiance(sun)))
-        # Where the sea's sun glint lies seen from a hull (glint_lobe module).
-        self.glint = glint_lobe.GlintLobe(sun_axis(sun), wind_speed, settings.glint_share)
+        irradiance = disk_irradiance(sun)
+        self.sun_irradiance = mi.Color3f(*(opaque_scalar(c) for c in irradiance))
+        # Where the sea's sun glint lies seen from a hull (glint_lobe module); none from a
+        # sun that gives no light.
+        shining = bool(np.max(irradiance) > 0.0)
+        self.glint = glint_lobe.GlintLobe(sun_axis(sun), wind_speed, settings.glint_share, shining)
         self.levels = PassLevels(medium, n_levels, grey)
         self.pixel_ratio: Any = None
         # A parameter: another count reuses the kernel.
