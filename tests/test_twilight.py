@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.ndimage import median_filter
 
 from seahaze import twilight
 from seahaze.overcast import REC709_LUMINANCE
@@ -144,7 +145,7 @@ def _radiance(emitter, direction) -> np.ndarray:
 def test_the_glow_lies_under_the_sun_in_the_world(azimuth_deg):
     import mitsuba as mi
 
-    from seahaze.render.sky import sun_and_sky_dicts, twilight_dict
+    from seahaze.render.sky import sun_dict, twilight_dict
 
     spec = twilight_spec(azimuth_deg=azimuth_deg)
     emitter = mi.load_dict(twilight_dict(spec))
@@ -159,7 +160,7 @@ def test_the_glow_lies_under_the_sun_in_the_world(azimuth_deg):
     assert radiance["toward"][0] > radiance["toward"][2]
     assert np.all(_radiance(emitter, (0.6, 0.0, -0.8)) == 0.0)
     # No sun: its emitter is switched off.
-    sun, _ = sun_and_sky_dicts(spec)
+    sun = sun_dict(spec)
     assert sun["sun_scale"] == 0.0 and sun["sky_scale"] == 0.0
 
 
@@ -190,7 +191,7 @@ def test_a_twilight_scene_renders_without_a_sun_its_glow_on_the_right():
     from seahaze.render.engine import open_session
     from seahaze.spec import with_overrides
 
-    spec = with_overrides(twilight_spec(), resolution=(64, 36), spp=4, levels=[1000.0])
+    spec = with_overrides(twilight_spec(), resolution=(96, 54), spp=4, levels=[1000.0])
     session = open_session(spec)
     clean, levels = session.level_renderer().render_all([3.912e-3])
     assert np.all(np.isfinite(clean)) and np.all(np.isfinite(levels[0].radiance))
@@ -205,6 +206,12 @@ def test_a_twilight_scene_renders_without_a_sun_its_glow_on_the_right():
     assert right[:, 0].mean() / right[:, 2].mean() > left[:, 0].mean() / left[:, 2].mean()
     # The haze is lit by that sky alone: a level is no brighter than a sky of its light.
     assert levels[0].radiance.mean() < 2 * clean[sky].mean()
+    # No fireflies on the sea: a set sun's glint lobe, at the horizon, once sent the sea's
+    # facets' paths along it (11 % of the sea's pixels over twice their neighbourhood's
+    # median at this size; 0.4 % since the lobe follows only a shining sun).
+    sea = np.isfinite(session.pixels.distance_m) & (session.pixels.instance < 0)
+    grey = clean.mean(axis=2)
+    assert np.mean((grey > 2.0 * median_filter(grey, 5))[sea]) < 0.02
 
 
 @pytest.mark.parametrize(
@@ -219,8 +226,22 @@ def test_a_twilight_scene_renders_without_a_sun_its_glow_on_the_right():
         (
             "sun:\n  elevation_deg: -2\nsky:\n  model: twilight\n"
             "variation:\n  sky_models: [clear]\n",
-            "variation.sky_models: a batch varies daylight suns and skies",
+            "variation.sky_models: its clear skies need a sun above the horizon (0.5..89.5",
         ),
+        (
+            "variation:\n  sky_models: [overcast, twilight]\n",
+            "its overcast skies need a sun above the horizon",
+        ),
+        (
+            "sun:\n  elevation_deg: -2\nsky:\n  model: twilight\n"
+            "variation:\n  sun_elevation_deg: [10, 20]\n",
+            "variation.sun_elevation_deg draws daylight suns, but every scene's sky is twilight",
+        ),
+        (
+            "variation:\n  twilight_sun_elevation_deg: [-4, -1]\n",
+            "no scene of this batch has a twilight sky",
+        ),
+        ("variation:\n  twilight_sun_elevation_deg: [-8, -1]\n", "greater than or equal to -6"),
     ],
 )
 def test_a_sun_that_does_not_fit_the_sky_is_named(text, needle):
@@ -238,3 +259,40 @@ def test_the_phase_functions_are_normalised_and_hg_has_its_mean_cosine():
     assert 2 * math.pi * np.trapezoid(aerosol, mu) == pytest.approx(1.0, rel=1e-4)
     mean_cosine = 2 * math.pi * np.trapezoid(aerosol * mu, mu)
     assert mean_cosine == pytest.approx(twilight.AEROSOL_ASYMMETRY, rel=1e-3)
+
+
+BATCH = """
+sun:
+  elevation_deg: 30
+variation:
+  sun_elevation_deg: [10, 50]
+  sky_models: [clear, twilight]
+"""
+
+
+def _drawn(text: str, count: int = 16):
+    from seahaze.batch import plan_scenes
+
+    spec = parse_scene_text(text, "dusk.yaml")
+    jobs = plan_scenes([(spec, "dusk")], count).jobs
+    assert [j.spec for j in jobs] == [j.spec for j in plan_scenes([(spec, "dusk")], count).jobs]
+    return [(j.spec.sky.model, j.spec.sun.elevation_deg) for j in jobs]
+
+
+def test_a_batch_draws_twilight_scenes_each_with_a_sun_of_its_sky():
+    drawn = _drawn(BATCH + "  twilight_sun_elevation_deg: [-4, -1]\n")
+    assert {m for m, _ in drawn} == {"clear", "twilight"}
+    for model, elevation in drawn:
+        low, high = (-4.0, -1.0) if model == "twilight" else (10.0, 50.0)
+        assert low <= elevation <= high, (model, elevation)
+    # Without a twilight range the twilight scenes span civil twilight.
+    dusk = [e for m, e in _drawn(BATCH, 24) if m == "twilight"]
+    assert dusk and all(-6.0 <= e <= 0.0 for e in dusk) and len(set(dusk)) == len(dusk)
+
+
+def test_a_twilight_template_keeps_its_sun_or_draws_one_from_its_range():
+    template = "sun:\n  elevation_deg: -2.5\nsky:\n  model: twilight\n"
+    assert {e for _, e in _drawn(template + "variation:\n  wind_speed: [3, 9]\n", 4)} == {-2.5}
+    ranged = _drawn(template + "variation:\n  twilight_sun_elevation_deg: [-5, -3]\n", 8)
+    assert all(m == "twilight" and -5.0 <= e <= -3.0 for m, e in ranged)
+    assert len({e for _, e in ranged}) == 8

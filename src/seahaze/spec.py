@@ -1119,6 +1119,7 @@ class RenderSpec(_Spec):
 
 _AngleEnd = Annotated[float, Field(ge=-360.0, le=360.0)]
 _ElevationEnd = Annotated[float, Field(ge=0.5, le=89.5)]
+_TwilightEnd = Annotated[float, Field(ge=-6.0, le=0.0)]
 _WindEnd = Annotated[float, Field(ge=0.0, le=40.0)]
 _HeightEnd = Annotated[float, Field(ge=0.5, le=1000.0)]
 _PitchEnd = Annotated[float, Field(ge=-60.0, le=30.0)]
@@ -1186,11 +1187,19 @@ class VariationSpec(_Spec):
         description="Range `[low, high]` of `camera.roll_deg` (each end within -45..45).",
         json_schema_extra=_unit("deg"),
     )
-    sky_models: list[Literal["clear", "broken", "overcast"]] | None = Field(
+    sky_models: list[Literal["clear", "broken", "overcast", "twilight"]] | None = Field(
         None,
         min_length=1,
         description="`sky.model`s to draw from, each equally likely (a name twice counts "
-        "twice), e.g. `[clear, broken, overcast, overcast]` for mostly grey days.",
+        "twice), e.g. `[clear, broken, overcast, overcast]` for mostly grey days; a scene "
+        "drawn `twilight` draws its sun from `twilight_sun_elevation_deg`.",
+    )
+    twilight_sun_elevation_deg: tuple[_TwilightEnd, _TwilightEnd] | None = Field(
+        None,
+        description="Range `[low, high]` of `sun.elevation_deg` for a scene whose sky is "
+        "`twilight` (each end within -6..0; default: all of civil twilight, -6..0, where "
+        "`sky_models` draws it, the template's sun where the template is twilight).",
+        json_schema_extra=_unit("deg"),
     )
     cloud_oktas: tuple[_OktaEnd, _OktaEnd] | None = Field(
         None,
@@ -1221,7 +1230,7 @@ class VariationSpec(_Spec):
             if getattr(self, key) is None:
                 data.pop(key, None)
         # The clouds' settings too, at their defaults: configs recorded before them read alike.
-        for key in ("sky_models", "cloud_oktas"):
+        for key in ("sky_models", "cloud_oktas", "twilight_sun_elevation_deg"):
             if getattr(self, key) is None:
                 data.pop(key, None)
         if self.resample_clouds:
@@ -1459,11 +1468,28 @@ class SceneSpec(_Spec):
                 f"sun.elevation_deg {elevation:g}: a '{model}' sky takes {low:g}..{high:g} deg; "
                 f"for this sun set sky.model to {other}"
             )
-        varied = [k for k in ("sun_elevation_deg", "sky_models") if getattr(self.variation, k)]
-        if model == "twilight" and varied:
+        # A batch's scenes (the same rules hold for the template and every scene drawn from
+        # it, which keeps its variation): a daylight sky takes a daylight sun, the template's
+        # or drawn; a twilight one draws its own (or keeps a twilight template's). A batch of
+        # both draws each its own, so the daylight one is drawn too.
+        variation, drawn = self.variation, self.variation.sky_models
+        daylight = [m for m in drawn or [model] if m != "twilight"]
+        twilight = "twilight" in (drawn or [model])
+        if daylight and variation.sun_elevation_deg is None and (twilight or model == "twilight"):
             raise ValueError(
-                f"variation.{varied[0]}: a batch varies daylight suns and skies, not a "
-                "`twilight` sky's; remove it or use a daylight sky.model"
+                f"variation.sky_models: its {daylight[0]} skies need a sun above the horizon "
+                f"({DAYLIGHT_SUN_DEG[0]:g}..{DAYLIGHT_SUN_DEG[1]:g} deg), which a twilight "
+                "sun is not: give variation.sun_elevation_deg to draw theirs"
+            )
+        if variation.sun_elevation_deg is not None and not daylight:
+            raise ValueError(
+                "variation.sun_elevation_deg draws daylight suns, but every scene's sky is "
+                "twilight; use variation.twilight_sun_elevation_deg"
+            )
+        if variation.twilight_sun_elevation_deg is not None and not twilight:
+            raise ValueError(
+                "variation.twilight_sun_elevation_deg: no scene of this batch has a twilight "
+                "sky; set sky.model: twilight, put twilight in variation.sky_models or remove it"
             )
         return self
 

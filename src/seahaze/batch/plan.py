@@ -18,7 +18,7 @@ from typing import Any
 
 from ..dataset.splits import SplitAssignment, SplitFractions, assign_splits
 from ..seeds import scene_seed, variation_rng
-from ..spec import SceneSpec
+from ..spec import TWILIGHT_SUN_DEG, SceneSpec, VariationSpec
 from .errors import DatasetError
 
 VARIED: dict[str, tuple[str, str]] = {
@@ -33,6 +33,20 @@ VARIED: dict[str, tuple[str, str]] = {
     "camera_roll_deg": ("camera", "roll_deg"),
 }
 """Each ``variation`` range and the spec field it sets; the order fixes each one's stream."""
+
+
+def _draw_twilight_sun(data: dict, variation: VariationSpec, seed: int) -> None:
+    """A twilight scene's sun: drawn uniformly from ``twilight_sun_elevation_deg``, or from
+    all of civil twilight where ``sky_models`` drew the twilight (its daylight sun, drawn or
+    the template's, is no twilight sun); its own stream, after the sky model's."""
+    if data["sky"].get("model") != "twilight":
+        return
+    bounds = variation.twilight_sun_elevation_deg
+    if bounds is None and variation.sky_models is None:
+        return  # a twilight template keeps its own sun
+    low, high = bounds if bounds is not None else TWILIGHT_SUN_DEG
+    value = round(float(variation_rng(seed, len(VARIED) + 2).uniform(low, high)), 3)
+    data["sun"]["elevation_deg"] = min(max(value, low), high)
 
 
 @dataclass(frozen=True)
@@ -167,6 +181,7 @@ def vary_scene(spec: SceneSpec, seed: int) -> SceneSpec:
         # One of the listed models, each entry equally likely; its own stream.
         draw = variation_rng(seed, len(VARIED) + 1).integers(len(variation.sky_models))
         data["sky"]["model"] = variation.sky_models[int(draw)]
+    _draw_twilight_sun(data, variation, seed)
     if data["sky"].get("model", "clear") != "broken":
         data["sky"].pop("clouds", None)  # a clear or overcast sky has no cloud layer
     elif variation.cloud_oktas is not None:
