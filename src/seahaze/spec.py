@@ -158,7 +158,7 @@ class SunSpec(_Spec):
     elevation_deg: float = Field(
         25.0,
         ge=TWILIGHT_SUN_DEG[0],
-        le=89.5,
+        le=DAYLIGHT_SUN_DEG[1],
         description="Sun elevation above the horizon: 0.5..89.5 under a clear, broken or "
         "overcast sky; -6..0 (the sun set, civil twilight) under a `twilight` sky.",
         json_schema_extra=_unit("deg"),
@@ -1118,8 +1118,8 @@ class RenderSpec(_Spec):
 
 
 _AngleEnd = Annotated[float, Field(ge=-360.0, le=360.0)]
-_ElevationEnd = Annotated[float, Field(ge=0.5, le=89.5)]
-_TwilightEnd = Annotated[float, Field(ge=-6.0, le=0.0)]
+_ElevationEnd = Annotated[float, Field(ge=DAYLIGHT_SUN_DEG[0], le=DAYLIGHT_SUN_DEG[1])]
+_TwilightEnd = Annotated[float, Field(ge=TWILIGHT_SUN_DEG[0], le=TWILIGHT_SUN_DEG[1])]
 _WindEnd = Annotated[float, Field(ge=0.0, le=40.0)]
 _HeightEnd = Annotated[float, Field(ge=0.5, le=1000.0)]
 _PitchEnd = Annotated[float, Field(ge=-60.0, le=30.0)]
