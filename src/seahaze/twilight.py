@@ -1,4 +1,4 @@
-"""The twilight sky: sunlight scattered once in a spherical atmosphere, the sun below the horizon.
+"""The twilight sky: sunlight scattered in a spherical atmosphere, the sun below the horizon.
 
 When the sun has set, no direct light reaches the sea: the sky is lit by sunlight that grazes
 the Earth and scatters in the air still above the Earth's shadow. That shadow rises from the
@@ -19,9 +19,16 @@ E. (1993). Display of the Earth taking into account atmospheric scattering. *SIG
     where ``T_sun`` is zero where the straight line from ``p`` to the sun meets the sea (the
     Earth's shadow; refraction, which lifts the sun's rays by about half a degree at grazing,
     is left out), the transmittances are ``exp(−Σ_k β_k(λ) ∫ n_k ds)`` along each path, and
-    ``Θ`` is the scattering angle. Light scattered more than once is left out: it brightens the
-    zenith late in civil twilight (the test against measured illuminance below states how much
-    that costs).
+    ``Θ`` is the scattering angle.
+
+Second order
+    Single scattering leaves the Earth's shadow black. Each point also scatters the skylight
+    around it, taken as the single-scattered sky of a sea-level observer whose sun stands
+    where the point's does, uniform over the upper hemisphere and reflected by the sea below:
+    a mean radiance ``J = E (1 + A) / 2π`` from that sky's horizontal irradiance ``E`` and the
+    sea's albedo ``A`` (:func:`_skylight_source`). Higher orders are left out; they brighten
+    the zenith late in civil twilight, so the model's deepest twilight is on the dark side
+    (the test against measured illuminance below bounds it).
 
 The atmosphere (three species, densities ``n_k`` relative to a reference)
     - Air (Rayleigh): ``n = exp(−z/8 km)``; vertical optical depth at sea level
