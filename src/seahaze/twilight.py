@@ -312,24 +312,60 @@ SKYLIGHT_SUN_ELEVATIONS_DEG = np.arange(-24.0, 12.1, 1.0)
 second order (deg): a view ray's far end, a thousand kilometres away, sees the sun up to 10°
 higher or lower than the observer does."""
 
+SKYLIGHT_FLOOR = 1e-30
+"""The table's floor before its logarithm is taken (a sun so deep that no air it lights is
+seen gives an exact 0)."""
+
 SEA_ALBEDO = 0.06
 """Albedo of the sea under a diffuse sky, which returns part of the skylight upward."""
+
+
+COARSE_GRID = (24, 13)
+"""Elevations × azimuths of the coarse grid on which the sky's horizontal irradiance alone is
+integrated (the second order's table, the renderer's scale): within 0.2 % of the fine grid's."""
+
+
+def hemisphere_integral(
+    radiance: np.ndarray, elevation: np.ndarray, azimuth: np.ndarray
+) -> np.ndarray:
+    """``∫ L cos θ dω`` over the upper hemisphere of ``radiance`` (elevations × azimuths × …)
+    on a grid of ``elevation`` and relative ``azimuth`` (rad, 0–π): the trapezoidal rule in
+    both, the sky mirrored about the sun's vertical plane."""
+    weight = (np.sin(elevation) * np.cos(elevation)).reshape(-1, *[1] * (radiance.ndim - 1))
+    over_elevation = np.trapezoid(radiance * weight, elevation, axis=0)
+    return 2.0 * np.trapezoid(over_elevation, azimuth, axis=0)
+
+
+def spectral_irradiance(
+    sun_elevation_deg: float,
+    turbidity: float,
+    multiple: bool = True,
+    ozone_du: float = OZONE_COLUMN_DU,
+) -> np.ndarray:
+    """(L,) horizontal irradiance of the sky at sea level for a sun at ``sun_elevation_deg``,
+    per unit of the sun's spectral irradiance above the atmosphere, on :data:`COARSE_GRID`."""
+    elevation = 0.5 * math.pi * np.linspace(0.0, 1.0, COARSE_GRID[0]) ** 2
+    azimuth = np.radians(np.linspace(0.0, 180.0, COARSE_GRID[1]))
+    e, phi = np.meshgrid(elevation, azimuth, indexing="ij")
+    sun = math.radians(sun_elevation_deg)
+    radiance = spectral_radiance(e, phi, sun, turbidity, multiple, ozone_du)
+    return hemisphere_integral(radiance, elevation, azimuth)
+
+
+def irradiance_rgb(sun_elevation_deg: float, turbidity: float) -> np.ndarray:
+    """(3,) linear sRGB horizontal irradiance of the sky for a sun at ``sun_elevation_deg``
+    (:func:`spectral_irradiance`)."""
+    return spectral_irradiance(sun_elevation_deg, turbidity) @ _spectrum_to_rgb()
 
 
 @cache
 def _skylight_table(turbidity: float, ozone_du: float) -> np.ndarray:
     """(elevations, L): horizontal irradiance of the single-scattered sky at sea level for a
-    sun at each of :data:`SKYLIGHT_SUN_ELEVATIONS_DEG`, per unit of the sun's irradiance (a
-    coarse grid: the second order it lights is itself a few percent of the sky)."""
-    elevation = 0.5 * math.pi * np.linspace(0.0, 1.0, 24) ** 2
-    azimuth = np.radians(np.linspace(0.0, 180.0, 13))
-    e, phi = np.meshgrid(elevation, azimuth, indexing="ij")
-    weight = (np.sin(e) * np.cos(e))[..., None]
-    rows = []
-    for sun in np.radians(SKYLIGHT_SUN_ELEVATIONS_DEG):
-        radiance = spectral_radiance(e, phi, sun, turbidity, False, ozone_du)
-        over_elevation = np.trapezoid(radiance * weight, elevation, axis=0)
-        rows.append(2.0 * np.trapezoid(over_elevation, azimuth, axis=0))
+    sun at each of :data:`SKYLIGHT_SUN_ELEVATIONS_DEG` (:func:`spectral_irradiance`)."""
+    rows = [
+        spectral_irradiance(float(h), turbidity, False, ozone_du)
+        for h in SKYLIGHT_SUN_ELEVATIONS_DEG
+    ]
     return np.stack(rows)
 
 
@@ -340,8 +376,10 @@ def _skylight_source(cos_sun_zenith: np.ndarray, turbidity: float, ozone_du: flo
     ``J = E (1 + A) / 2π``."""
     table = _skylight_table(turbidity, ozone_du)
     elevation = np.degrees(np.arcsin(np.clip(cos_sun_zenith, -1.0, 1.0)))
+    # The skylight falls about tenfold every 2° of depression: interpolated in its logarithm.
+    log_table = np.log(np.maximum(table, SKYLIGHT_FLOOR))
     columns = [
-        np.interp(elevation, SKYLIGHT_SUN_ELEVATIONS_DEG, table[:, k], left=0.0)
+        np.exp(np.interp(elevation, SKYLIGHT_SUN_ELEVATIONS_DEG, log_table[:, k], left=-np.inf))
         for k in range(table.shape[1])
     ]
     return np.stack(columns, axis=-1) * (1.0 + SEA_ALBEDO) / (2.0 * math.pi)
@@ -371,11 +409,8 @@ class SkyGrid:
     rgb: np.ndarray
 
     def horizontal_irradiance(self) -> np.ndarray:
-        """``∫ L cos θ dω`` (RGB) over the upper hemisphere: the trapezoidal rule in elevation
-        and relative azimuth, the sky mirrored about the sun's vertical plane."""
-        weight = np.sin(self.elevation) * np.cos(self.elevation)
-        over_elevation = np.trapezoid(self.rgb * weight[:, None, None], self.elevation, axis=0)
-        return 2.0 * np.trapezoid(over_elevation, self.azimuth, axis=0)
+        """``∫ L cos θ dω`` (RGB) over the upper hemisphere (:func:`hemisphere_integral`)."""
+        return hemisphere_integral(self.rgb, self.elevation, self.azimuth)
 
     def radiance(self, elevation: np.ndarray, relative_azimuth: np.ndarray) -> np.ndarray:
         """(…, 3) RGB radiance in these directions (rad; 0 below the horizon), bilinear in the

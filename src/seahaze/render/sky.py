@@ -254,7 +254,7 @@ def twilight_scale(turbidity: float, ground_albedo: float) -> float:
     clear = horizontal_irradiance(
         mi.load_dict(_sunsky(low, 0.0, turbidity, ground_albedo, 0.0, 1.0))
     )
-    model = twilight.sky_grid(low, turbidity).horizontal_irradiance()
+    model = twilight.irradiance_rgb(low, turbidity)
     return float(overcast.REC709_LUMINANCE @ clear / (overcast.REC709_LUMINANCE @ model))
 
 
