@@ -122,7 +122,7 @@ def _to_rgb(spectral: np.ndarray) -> np.ndarray:
 
     cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
     sun = np.asarray(colour.colorimetry.planck_law(twilight.WAVELENGTHS_NM * 1e-9, 5778.0))
-    xyz = (spectral * sun) @ np.asarray(cmfs[twilight.WAVELENGTHS_NM])
+    xyz = (spectral * sun / sun.max()) @ np.asarray(cmfs[twilight.WAVELENGTHS_NM])
     return xyz @ np.asarray(colour.models.RGB_COLOURSPACE_sRGB.matrix_XYZ_to_RGB).T
 
 
@@ -296,3 +296,20 @@ def test_a_twilight_template_keeps_its_sun_or_draws_one_from_its_range():
     ranged = _drawn(template + "variation:\n  twilight_sun_elevation_deg: [-5, -3]\n", 8)
     assert all(m == "twilight" and -5.0 <= e <= -3.0 for m, e in ranged)
     assert len({e for _, e in ranged}) == 8
+
+
+def test_planck_peaks_where_wien_says():
+    # Wien's displacement law: λ_max = b/T, b = 2.897771955e-3 m K (CODATA 2018): 501.5 nm at
+    # the sun's 5778 K.
+    wavelengths = np.linspace(400.0, 600.0, 20_001)
+    peak = wavelengths[np.argmax(twilight.planck_radiance(wavelengths, 5778.0))]
+    assert peak == pytest.approx(2.897771955e-3 / 5778.0 * 1e9, abs=0.02)
+
+
+def test_the_spectrum_turns_into_srgb_as_colour_science_computes_it():
+    # Mitsuba's CIE 1931 tables and XYZ-to-sRGB matrix against colour-science's, through an
+    # independent sum (the test's own): the renderer's colours are the CIE's. colour-science
+    # rounds the sRGB matrix to four digits, which moves the small, cancelling entries by up
+    # to 2e-4 (of entries up to 1.8).
+    spectra = np.eye(len(twilight.WAVELENGTHS_NM))
+    np.testing.assert_allclose(twilight.spectrum_to_rgb(), _to_rgb(spectra), rtol=2e-3, atol=5e-4)

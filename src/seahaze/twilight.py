@@ -355,7 +355,7 @@ def spectral_irradiance(
 def irradiance_rgb(sun_elevation_deg: float, turbidity: float) -> np.ndarray:
     """(3,) linear sRGB horizontal irradiance of the sky for a sun at ``sun_elevation_deg``
     (:func:`spectral_irradiance`)."""
-    return spectral_irradiance(sun_elevation_deg, turbidity) @ _spectrum_to_rgb()
+    return spectral_irradiance(sun_elevation_deg, turbidity) @ spectrum_to_rgb()
 
 
 @cache
@@ -385,18 +385,26 @@ def _skylight_source(cos_sun_zenith: np.ndarray, turbidity: float, ozone_du: flo
     return np.stack(columns, axis=-1) * (1.0 + SEA_ALBEDO) / (2.0 * math.pi)
 
 
-@cache
-def _spectrum_to_rgb() -> np.ndarray:
-    """(L, 3): linear sRGB of each spectral sample of the sun's black body (its weight in the
-    CIE 1931 2° observer's integral times the sun's spectrum)."""
-    import colour
+def planck_radiance(wavelength_nm: np.ndarray, temperature_k: float) -> np.ndarray:
+    """Spectral radiance of a black body, ``2hc²/λ⁵ / (e^(hc/λkT) − 1)`` (W m⁻² sr⁻¹ m⁻¹;
+    Planck's law with the CODATA 2018 constants)."""
+    h, c, k = 6.62607015e-34, 2.99792458e8, 1.380649e-23
+    lam = np.asarray(wavelength_nm, np.float64) * 1e-9
+    return 2.0 * h * c**2 / lam**5 / np.expm1(h * c / (lam * k * temperature_k))
 
-    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
-    xyz_bar = np.asarray(cmfs[WAVELENGTHS_NM])
-    sun = colour.colorimetry.planck_law(WAVELENGTHS_NM * 1e-9, SUN_TEMPERATURE_K)
-    sun = np.asarray(sun, np.float64) / np.max(sun)
-    to_rgb = colour.models.RGB_COLOURSPACE_sRGB.matrix_XYZ_to_RGB
-    return (xyz_bar * sun[:, None]) @ np.asarray(to_rgb).T
+
+@cache
+def spectrum_to_rgb() -> np.ndarray:
+    """(L, 3): linear sRGB of each spectral sample weighted by the sun's black body (its CIE
+    1931 2° colour-matching functions times the sun's relative spectrum, through the XYZ to
+    linear sRGB matrix). The tables are Mitsuba's own, from its scalar variant: no import of
+    colour-science, which pulls in matplotlib."""
+    import mitsuba.scalar_rgb as ms
+
+    xyz_bar = np.array([list(ms.cie1931_xyz(float(w))) for w in WAVELENGTHS_NM])
+    to_rgb = np.array([list(ms.xyz_to_srgb(ms.Color3f(*axis))) for axis in np.eye(3)]).T
+    sun = planck_radiance(WAVELENGTHS_NM, SUN_TEMPERATURE_K)
+    return (xyz_bar * (sun / sun.max())[:, None]) @ to_rgb.T
 
 
 @dataclass(frozen=True)
@@ -431,4 +439,4 @@ def sky_grid(sun_elevation_deg: float, turbidity: float) -> SkyGrid:
     azimuth = np.radians(np.linspace(0.0, 180.0, GRID_AZIMUTHS))
     e, phi = np.meshgrid(elevation, azimuth, indexing="ij")
     spectral = spectral_radiance(e, phi, math.radians(sun_elevation_deg), turbidity)
-    return SkyGrid(elevation, azimuth, spectral @ _spectrum_to_rgb())
+    return SkyGrid(elevation, azimuth, spectral @ spectrum_to_rgb())
