@@ -47,3 +47,38 @@ def test_decode_is_the_iec_transfer_function_at_published_points() -> None:
     assert imaging.srgb_decode(0.04045) == pytest.approx(0.04045 / 12.92, rel=1e-12)
     assert imaging.srgb_decode(128 / 255) == pytest.approx(0.2158605, abs=1e-7)
     assert imaging.srgb_decode(1.0) == pytest.approx(1.0, abs=1e-15)
+
+
+def _sky_scene(upper_radiance: float, sun_pixels: int = 0):
+    """A 100×50 frame: sky in the top half (its lower rows within the horizon band, radiance
+    0.2; the rows above 10° at ``upper_radiance``), sea below; ``sun_pixels`` sky pixels at
+    1000 (a sun disk)."""
+    rows, columns = 100, 50
+    elevation = np.repeat(np.linspace(30.0, -30.0, rows)[:, None], columns, axis=1)
+    distance = np.where(elevation > 0.0, np.inf, 500.0)
+    y = np.where(elevation > imaging.HORIZON_BAND_DEG, upper_radiance, 0.2)
+    y = np.where(elevation > 0.0, y, 0.05)
+    y.flat[:sun_pixels] = 1000.0
+    return np.repeat(y[..., None], 3, axis=2), distance, elevation
+
+
+def test_auto_exposure_puts_the_horizon_sky_at_the_key():
+    clean, distance, elevation = _sky_scene(upper_radiance=0.15)
+    assert imaging.auto_exposure(clean, distance, elevation) == pytest.approx(0.6 / 0.2)
+    # A sun disk (1 % of the sky) clips, as a camera's would, and leaves the exposure.
+    clean, distance, elevation = _sky_scene(upper_radiance=0.15, sun_pixels=25)
+    assert imaging.auto_exposure(clean, distance, elevation) == pytest.approx(0.6 / 0.2)
+    # Without sky: the frame's mean at 0.18.
+    sea = np.full((10, 10, 3), 0.3)
+    flat = np.zeros((10, 10))
+    assert imaging.auto_exposure(sea, flat + 100.0, flat - 5.0) == pytest.approx(0.18 / 0.3)
+
+
+def test_auto_exposure_keeps_a_sky_brighter_above_than_at_its_horizon_from_burning_out():
+    # Dusk away from the set sun: the Earth's shadow dark on the horizon, the sky above it
+    # three times as bright. Keyed to the horizon alone, two thirds of the sky would be white.
+    clean, distance, elevation = _sky_scene(upper_radiance=0.6)
+    exposure = imaging.auto_exposure(clean, distance, elevation)
+    sky = np.isinf(distance)
+    assert np.mean(clean[sky][:, 1] * exposure > 1.0 + 1e-9) <= 1.0 - imaging.SKY_HIGHLIGHT_QUANTILE
+    assert exposure == pytest.approx(1.0 / 0.6)

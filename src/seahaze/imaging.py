@@ -38,6 +38,10 @@ from .seeds import dither_seed
 AUTO_KEY = 0.6
 """Linear display value of the clean horizon sky under ``exposure: auto``."""
 HORIZON_BAND_DEG = 10.0
+SKY_HIGHLIGHT_QUANTILE = 0.98
+"""Under ``exposure: auto`` at most the brightest 2 % of the sky's pixels are brighter than
+white: a sky brighter above than at its horizon (the Belt of Venus over the Earth's shadow
+at dusk, the glow over a low sun) lowers the exposure rather than burn out."""
 SRGB_LINEAR_KNEE = 0.04045
 """Encoded value below which the sRGB transfer function is linear (IEC 61966-2-1:1999)."""
 _BIN_COUNT = 4096
@@ -56,14 +60,25 @@ def luminance(rgb: np.ndarray) -> np.ndarray:
 
 
 def auto_exposure(clean: np.ndarray, distance_m: np.ndarray, elevation_deg: np.ndarray) -> float:
-    """Exposure factor for a scene from its clean radiance, distance and pixel elevations."""
+    """Exposure factor for a scene from its clean radiance, distance and pixel elevations: the
+    horizon sky's median luminance at :data:`AUTO_KEY` (without sky, the mean at 0.18), lowered
+    where more than the sky's brightest 2 % would then be brighter than white
+    (:data:`SKY_HIGHLIGHT_QUANTILE`)."""
     y = luminance(clean)
-    horizon_sky = np.isinf(distance_m) & (elevation_deg < HORIZON_BAND_DEG)
+    sky = np.isinf(distance_m)
+    horizon_sky = sky & (elevation_deg < HORIZON_BAND_DEG)
     if horizon_sky.sum() >= 4:
         reference, key = float(np.median(y[horizon_sky])), AUTO_KEY
     else:
         reference, key = float(np.mean(y)), 0.18
-    return key / reference if reference > 0 and np.isfinite(reference) else 1.0
+    if not (reference > 0 and np.isfinite(reference)):
+        return 1.0
+    exposure = key / reference
+    if sky.sum() >= 4:
+        highlight = float(np.quantile(y[sky], SKY_HIGHLIGHT_QUANTILE))
+        if highlight > 0 and np.isfinite(highlight):
+            exposure = min(exposure, 1.0 / highlight)
+    return exposure
 
 
 def srgb_decode(encoded: np.ndarray) -> np.ndarray:
