@@ -157,6 +157,7 @@ def test_the_glow_lies_under_the_sun_in_the_world(azimuth_deg):
             emitter, (math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e))
         )
     assert radiance["toward"][0] > 2 * radiance["side"][0] > 0
+    assert radiance["toward"][0] > 3 * radiance["away"][0] > 0
     assert radiance["toward"][0] > radiance["toward"][2]
     assert np.all(_radiance(emitter, (0.6, 0.0, -0.8)) == 0.0)
     # No sun: its emitter is switched off.
