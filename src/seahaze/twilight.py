@@ -271,7 +271,7 @@ def spectral_radiance(
     multiple: bool = True,
     ozone_du: float = OZONE_COLUMN_DU,
 ) -> np.ndarray:
-    """(…, L) single-scattered sky radiance at :data:`WAVELENGTHS_NM` seen from sea level in
+    """(…, L) sky radiance at :data:`WAVELENGTHS_NM` seen from sea level in
     the directions of ``view_elevation`` (≥ 0) and ``relative_azimuth`` from the sun, per unit
     of the sun's spectral irradiance above the atmosphere (1/sr): sunlight scattered once,
     and, with ``multiple``, the skylight scattered once more (:func:`_skylight_source`)."""
@@ -295,9 +295,10 @@ def spectral_radiance(
     to_sun, lit = sun_columns(altitude, cos_sun)
     rayleigh_phase, aerosol_phase = phase_functions(cos_scatter)
     skylight = _skylight_source(cos_sun, turbidity, ozone_du) if multiple else None
+    extinction = air.extinction
     out = np.empty((*e.shape[:-1], len(WAVELENGTHS_NM)))
     for k in range(len(WAVELENGTHS_NM)):
-        beta = air.extinction[:, k]
+        beta = extinction[:, k]
         sunlit = np.exp(-np.tensordot(beta, to_sun, axes=1)) * lit
         scattering = (beta[0] * n[0], AEROSOL_ALBEDO * beta[1] * n[1])
         source = sunlit * (scattering[0] * rayleigh_phase + scattering[1] * aerosol_phase)
@@ -318,6 +319,14 @@ seen gives an exact 0)."""
 
 SEA_ALBEDO = 0.06
 """Albedo of the sea under a diffuse sky, which returns part of the skylight upward."""
+
+
+def view_grid(elevations: int, azimuths: int) -> tuple[np.ndarray, np.ndarray]:
+    """View elevations ``90° · u²`` (rad, fine at the horizon, where twilight changes fastest)
+    and relative azimuths spread evenly over 0–180° (rad; the sky is mirror-symmetric about
+    the sun's vertical plane)."""
+    elevation = 0.5 * math.pi * np.linspace(0.0, 1.0, elevations) ** 2
+    return elevation, np.radians(np.linspace(0.0, 180.0, azimuths))
 
 
 COARSE_GRID = (24, 13)
@@ -344,8 +353,7 @@ def spectral_irradiance(
 ) -> np.ndarray:
     """(L,) horizontal irradiance of the sky at sea level for a sun at ``sun_elevation_deg``,
     per unit of the sun's spectral irradiance above the atmosphere, on :data:`COARSE_GRID`."""
-    elevation = 0.5 * math.pi * np.linspace(0.0, 1.0, COARSE_GRID[0]) ** 2
-    azimuth = np.radians(np.linspace(0.0, 180.0, COARSE_GRID[1]))
+    elevation, azimuth = view_grid(*COARSE_GRID)
     e, phi = np.meshgrid(elevation, azimuth, indexing="ij")
     sun = math.radians(sun_elevation_deg)
     radiance = spectral_radiance(e, phi, sun, turbidity, multiple, ozone_du)
@@ -433,10 +441,10 @@ class SkyGrid:
 
 @cache
 def sky_grid(sun_elevation_deg: float, turbidity: float) -> SkyGrid:
-    """The single-scattered sky of a sun at ``sun_elevation_deg`` in a sky of Linke
-    ``turbidity`` on the model's grid (:data:`GRID_ELEVATIONS` × :data:`GRID_AZIMUTHS`)."""
-    elevation = 0.5 * math.pi * np.linspace(0.0, 1.0, GRID_ELEVATIONS) ** 2
-    azimuth = np.radians(np.linspace(0.0, 180.0, GRID_AZIMUTHS))
+    """The sky (sunlight scattered once, skylight once more) of a sun at ``sun_elevation_deg``
+    in a sky of Linke ``turbidity`` on the model's grid (:data:`GRID_ELEVATIONS` ×
+    :data:`GRID_AZIMUTHS`)."""
+    elevation, azimuth = view_grid(GRID_ELEVATIONS, GRID_AZIMUTHS)
     e, phi = np.meshgrid(elevation, azimuth, indexing="ij")
     spectral = spectral_radiance(e, phi, math.radians(sun_elevation_deg), turbidity)
     return SkyGrid(elevation, azimuth, spectral @ spectrum_to_rgb())
