@@ -1459,7 +1459,7 @@ class SceneSpec(_Spec):
     @model_validator(mode="after")
     def _sun_fits_the_sky(self) -> SceneSpec:
         # Hosek–Wilkie holds for a sun above the horizon only; the twilight model for one
-        # below it. A batch varies daytime suns and skies, which a twilight scene has not.
+        # below it.
         elevation, model = self.sun.elevation_deg, self.sky.model
         low, high = TWILIGHT_SUN_DEG if model == "twilight" else DAYLIGHT_SUN_DEG
         if not low <= elevation <= high:
