@@ -86,7 +86,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -257,31 +257,13 @@ class CloudLayer:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Fractal noise at layer points (m) with the octaves a ``footprint`` (m) resolves,
         rescaled to the full noise's spread, and how much the largest octave is resolved."""
-        shape = np.broadcast_shapes(np.shape(x), np.shape(y), np.shape(footprint))
-        total = np.zeros(shape)
-        power = np.zeros(shape)
-        resolved = np.ones(shape)
-        for octave in range(OCTAVES):
-            spacing = self.size_m / 2.0**octave
-            weight = OCTAVE_GAIN**octave * _resolved(footprint, spacing)
-            if octave == 0:
-                resolved = np.broadcast_to(weight, shape)
-            if not np.any(weight > 0.0):
-                break
-            total += weight * value_noise(x / spacing, y / spacing, 0.0, self.seed + 7919 * octave)
-            power += weight * weight
-        full_power = sum(OCTAVE_GAIN ** (2 * o) for o in range(OCTAVES))
-        scale = np.sqrt(full_power / np.maximum(power, 1e-300))
-        return np.where(power > 0.0, total * scale, 0.0), resolved
+        return _fractal_noise(x, y, footprint, self.size_m, self.seed)
 
-    @cached_property
+    @property
     def _tabulated(self) -> tuple[np.ndarray, float]:
-        """The full noise over a large square of the layer (:data:`CUT_SAMPLES`² points,
-        :data:`CUT_SPAN` largest spacings a side), and its 99th percentile (a cloud's core)."""
-        grid = (np.arange(CUT_SAMPLES) + 0.5) * (CUT_SPAN * self.size_m / CUT_SAMPLES)
-        x, y = np.meshgrid(grid, grid)
-        noise, _ = self._noise(x, y, 0.0)
-        return noise, float(np.quantile(noise, 0.99))
+        """The full noise over a large square of the layer and its 99th percentile (a cloud's
+        core): :func:`_tabulated_noise`."""
+        return _tabulated_noise(self.size_m, self.seed)
 
     @property
     def _cut(self) -> float:
@@ -295,21 +277,74 @@ class CloudLayer:
         otherwise add cover to a few-okta sky and take it from an almost overcast one)."""
         return np.interp(np.log(half_width), np.log(EDGE_WIDTHS), self._cuts)
 
-    @cached_property
+    @property
     def _cuts(self) -> np.ndarray:
-        """The cut of each of :data:`EDGE_WIDTHS` on the tabulated noise (bisection)."""
-        noise = self._tabulated[0][::2, ::2]  # 256² points: the cut's error is the layer's own
-        cuts = []
-        for width in EDGE_WIDTHS:
-            low, high = float(noise.min()) - width, float(noise.max()) + width
-            for _ in range(40):  # the mean cover falls as the cut rises
-                middle = 0.5 * (low + high)
-                if np.mean(_soft_cut(noise, middle, width)) > self.share:
-                    low = middle
-                else:
-                    high = middle
-            cuts.append(0.5 * (low + high))
-        return np.array(cuts)
+        """The cut of each of :data:`EDGE_WIDTHS`: :func:`_tabulated_cuts`."""
+        return _tabulated_cuts(self.share, self.size_m, self.seed)
+
+
+def _fractal_noise(
+    x: np.ndarray, y: np.ndarray, footprint: np.ndarray | float, size_m: float, seed: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """:meth:`CloudLayer._noise` of a layer of largest spacing ``size_m`` drawn by ``seed``."""
+    shape = np.broadcast_shapes(np.shape(x), np.shape(y), np.shape(footprint))
+    total = np.zeros(shape)
+    power = np.zeros(shape)
+    resolved = np.ones(shape)
+    for octave in range(OCTAVES):
+        spacing = size_m / 2.0**octave
+        weight = OCTAVE_GAIN**octave * _resolved(footprint, spacing)
+        if octave == 0:
+            resolved = np.broadcast_to(weight, shape)
+        if not np.any(weight > 0.0):
+            break
+        total += weight * value_noise(x / spacing, y / spacing, 0.0, seed + 7919 * octave)
+        power += weight * weight
+    full_power = sum(OCTAVE_GAIN ** (2 * o) for o in range(OCTAVES))
+    scale = np.sqrt(full_power / np.maximum(power, 1e-300))
+    return np.where(power > 0.0, total * scale, 0.0), resolved
+
+
+# The tables below depend on the layer's size and seed (and the cut on its cover), not on its
+# drift: a sequence's frames, and a scene's sun and sky built apart, share them.
+@lru_cache(maxsize=8)
+def _tabulated_noise(size_m: float, seed: int) -> tuple[np.ndarray, float]:
+    """The full noise over a large square of a layer (:data:`CUT_SAMPLES`² points,
+    :data:`CUT_SPAN` largest spacings a side; read-only), and its 99th percentile."""
+    grid = (np.arange(CUT_SAMPLES) + 0.5) * (CUT_SPAN * size_m / CUT_SAMPLES)
+    x, y = np.meshgrid(grid, grid)
+    noise, _ = _fractal_noise(x, y, 0.0, size_m, seed)
+    noise.setflags(write=False)
+    return noise, float(np.quantile(noise, 0.99))
+
+
+@lru_cache(maxsize=32)
+def _tabulated_cuts(share: float, size_m: float, seed: int) -> np.ndarray:
+    """The cut of each of :data:`EDGE_WIDTHS` that leaves ``share`` of the tabulated noise
+    covered, by bisection (read-only)."""
+    noise = _tabulated_noise(size_m, seed)[0][::2, ::2]  # 256² points: the error is the layer's
+    ordered = np.sort(noise, axis=None)
+    cuts = []
+    for width in EDGE_WIDTHS:
+        low, high = float(ordered[0]) - width, float(ordered[-1]) + width
+        for _ in range(40):  # the mean cover falls as the cut rises
+            middle = 0.5 * (low + high)
+            if _mean_soft_cover(ordered, middle, width) > share:
+                low = middle
+            else:
+                high = middle
+        cuts.append(0.5 * (low + high))
+    table = np.array(cuts)
+    table.setflags(write=False)
+    return table
+
+
+def _mean_soft_cover(ordered: np.ndarray, cut: float, half_width: float) -> float:
+    """The mean of :func:`_soft_cut` over sorted noise values: 1 above the edge, 0 below it,
+    so that only the values on the edge are evaluated."""
+    start, end = np.searchsorted(ordered, (cut - half_width, cut + half_width))
+    edge = _soft_cut(ordered[start:end], cut, half_width)
+    return float((ordered.size - end + np.sum(edge)) / ordered.size)
 
 
 def _transmission(optical_depth: np.ndarray) -> np.ndarray:
