@@ -1,13 +1,13 @@
 """Which kernels does a new image size or sample count compile, and how long do they take?
 
 The default scene's physical pass (clean + 11 levels) is rendered in one process, with an empty
-drjit kernel cache (``HOME`` pointed at a new folder, as on a fresh machine), at 160×90 and
-16 spp, then at 128×72 (a new size whose pixel count lies in the same octave: 9,216 and 14,400
-are both in (8,192, 16,384]), then at 192×108 (a new size in the next octave), then at 160×90
-and 25 spp (a new sample count). drjit's kernel history gives each launched kernel's
-operation count and the time its backend (LLVM or the CUDA driver) spent compiling it; a kernel
-the cache held costs no backend time. The largest kernels of each render are listed, and the
-"Cold start" section of docs/benchmarks.md is written.
+drjit kernel cache (``HOME`` pointed at a new folder, as on a fresh machine), at 160×90 and 16
+spp, then at 64×36 (a new size two octaves of pixel counts smaller: both under the sums'
+smallest length, ``seahaze.render.wavefront.SMALLEST_SUM_CAPACITY``), then at 384×216 (a new
+size over it: 82,944 pixels), then at 160×90 and 25 spp (a new sample count). drjit's kernel
+history gives each launched kernel's operation count and the time its backend (LLVM or the CUDA
+driver) spent compiling it; a kernel the cache held costs no backend time. The largest kernels
+of each render are listed, and the "Cold start" section of docs/benchmarks.md is written.
 
 Usage: python scripts/bench_kernel_sizes.py [--doc]
 """
@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_passes import replace_section  # noqa: E402
 
-CONFIGS = (((160, 90), 16), ((128, 72), 16), ((192, 108), 16), ((160, 90), 25))
+CONFIGS = (((160, 90), 16), ((64, 36), 16), ((384, 216), 16), ((160, 90), 25))
 """(size, spp) rendered in this order, one after the other in one process."""
 LARGEST = 3
 """Kernels listed per render (by backend time)."""

@@ -1,5 +1,6 @@
 """seahaze's render loop against Mitsuba's: the same images to the rounding of the pixels' sums,
-the AOVs in Mitsuba's order, and one compiled kernel for image sizes of one octave of pixels."""
+the AOVs in Mitsuba's order, and one compiled kernel for every small image size and for the sizes
+of one octave of pixels above them."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import numpy as np
 import pytest
 
 from conftest import box_vessel, load_flat_scene, small_spec
-from seahaze.render.wavefront import render_film
+from seahaze.render.wavefront import pixel_sum_capacity, render_film
 
 pytestmark = pytest.mark.usefixtures("mitsuba_variant")
 
@@ -86,12 +87,25 @@ def _large_kernels(size: tuple[int, int]) -> set[str]:
         gc.collect()
 
 
-def test_image_sizes_of_one_octave_share_the_compiled_kernel():
-    # 64×36 = 2304 and 80×45 = 3600 pixels: both in (2048, 4096]. The kernels' hashes are
-    # their source's, so the test holds whether or not the cache already had them.
-    first, second = _large_kernels((64, 36)), _large_kernels((80, 45))
+def test_small_image_sizes_share_the_compiled_kernel():
+    # 64×36 = 2304 and 200×100 = 20,000 pixels: two octaves apart, both under the smallest
+    # capacity of the sums. The kernels' hashes are their source's, so the test holds whether
+    # or not the cache already had them.
+    first, second = _large_kernels((64, 36)), _large_kernels((200, 100))
     assert first, "the render launched no large kernel"
     assert first == second
+
+
+def test_the_pixel_sums_hold_every_pixel_in_one_length_per_octave():
+    # The length is the kernel's one size: every small image gets the smallest, a larger one
+    # its pixel count rounded up to a power of two (never fewer than its pixels).
+    assert pixel_sum_capacity(1) == pixel_sum_capacity(256 * 256) == 1 << 16
+    assert pixel_sum_capacity(256 * 256 + 1) == pixel_sum_capacity(384 * 216) == 1 << 17
+    assert pixel_sum_capacity(1280 * 720) == pixel_sum_capacity(1024 * 1024) == 1 << 20
+    for n in (3, 4097, 65_535, 65_537, 1_000_001, 3840 * 2160):
+        capacity = pixel_sum_capacity(n)
+        assert capacity >= n and capacity & (capacity - 1) == 0
+        assert capacity == 1 << 16 or capacity < 2 * n
 
 
 def test_render_film_refuses_a_film_it_does_not_sum_like_mitsuba():

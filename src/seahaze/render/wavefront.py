@@ -1,19 +1,20 @@
 """Mitsuba's render loop for seahaze's cameras, with the image size out of the kernel.
 
-Mitsuba's ``SamplingIntegrator::render`` (the loop behind ``mi.render``) and its
-``perspective`` sensor write the film's width and height, their reciprocals and the
-ray-differential scale into the kernel as constants, so every new image size compiles the
-camera pass again: the largest kernels seahaze has, seconds to tens of seconds of LLVM time
-each on a small machine (docs/benchmarks.md, "What does a new image size or sample count
-compile?"). :func:`render_film` is that loop for what seahaze renders (one pass of ``spp``
-samples per pixel, a pinhole camera, a box-filtered RGB film) with those numbers passed as
-opaque values. It draws the same samples in the same order as Mitsuba's loop, so its images
-equal ``mi.render``'s to the rounding of each pixel's sum (Mitsuba's film orders the additions
-by its own rules; ``tests/test_wavefront.py``), and every image size whose pixel count lies in
-the same octave shares one compiled kernel (the per-thread sums' length is the one size left
-in it). The sums are drjit's per-thread ones, as in Mitsuba's film, so its reproducibility is
-the film's: the same bytes for the same seed on the CPU, with the exception docs/limits.md
-states; on a GPU the adds are atomic and their order varies in the last bits.
+Mitsuba's ``SamplingIntegrator::render`` (the loop behind ``mi.render``) and its ``perspective``
+sensor write the film's width and height, their reciprocals and the ray-differential scale into
+the kernel as constants, so every new image size compiles the camera pass again: the largest
+kernels seahaze has, seconds to tens of seconds of LLVM time each on a small machine
+(docs/benchmarks.md, "What does a new image size or sample count compile?"). :func:`render_film`
+is that loop for what seahaze renders (one pass of ``spp`` samples per pixel, a pinhole camera,
+a box-filtered RGB film) with those numbers passed as opaque values. It draws the same samples
+in the same order as Mitsuba's loop, so its images equal ``mi.render``'s to the rounding of each
+pixel's sum (Mitsuba's film orders the additions by its own rules; ``tests/test_wavefront.py``),
+and every image of up to 256×256 pixels, and above that every image size whose pixel count lies
+in the same octave, shares one compiled kernel (the per-thread sums' length is the one size left
+in it: :func:`pixel_sum_capacity`). The sums are drjit's per-thread ones, as in Mitsuba's film,
+so its reproducibility is the film's: the same bytes for the same seed on the CPU, with the
+exception docs/limits.md states; on a GPU the adds are atomic and their order varies in the last
+bits.
 
 Mitsuba's samplers write the sample count into the kernel too (``multijitter`` permutes within a
 grid of that many cells); the ``physical`` mode's integrators draw instead from
@@ -77,10 +78,7 @@ def render_film(
     # An RGB variant's rays carry weight 1: the radiance is the sample's value.
     channels = [spectrum.x, spectrum.y, spectrum.z, *aovs]
 
-    # On the CPU drjit sums into one private copy of the target per thread ("expand" mode, as
-    # Mitsuba's film does) and writes the target's length into the kernel: a length rounded up
-    # to a power of two lets every image size in the same octave share the kernel.
-    capacity = 1 << (n_pixels - 1).bit_length()
+    capacity = pixel_sum_capacity(n_pixels)
     sums = [dr.zeros(mi.Float, capacity) for _ in channels]
     for total, value in zip(sums, channels, strict=True):
         dr.scatter_reduce(dr.ReduceOp.Add, total, value, pixel)
@@ -98,6 +96,20 @@ def render_film(
     dr.sync_thread()
     image = np.stack([np.array(mean, dtype=np.float32)[:n_pixels] for mean in means], axis=-1)
     return image.reshape(height, width, len(channels))
+
+
+SMALLEST_SUM_CAPACITY = 1 << 16
+"""Fewest pixels the per-thread sums of :func:`render_film` hold (a 256×256 image)."""
+
+
+def pixel_sum_capacity(n_pixels: int) -> int:
+    """Length of the pixel sums for an image of ``n_pixels``: on the CPU drjit sums into one
+    private copy of the target per thread ("expand" mode, as Mitsuba's film does) and writes
+    the target's length into the kernel, so every image whose sums have one length shares the
+    kernel. Rounded up to a power of two, and at least :data:`SMALLEST_SUM_CAPACITY`: small
+    images (previews, tests, CI datasets) then share one kernel whatever their size, at the
+    cost of summing into copies of at most 256 KiB per channel and thread."""
+    return max(SMALLEST_SUM_CAPACITY, 1 << (n_pixels - 1).bit_length())
 
 
 def _pinhole_rays(sensor: Any, on_film: Any, pixel_size: Any, spp: int) -> Any:
