@@ -76,6 +76,17 @@ def seahaze_state(tmp_path_factory, monkeypatch):
     monkeypatch.setenv(STATE_ENV, str(tmp_path_factory.mktemp("state")))
 
 
+def emitter_radiance(emitter, direction) -> np.ndarray:
+    """The radiance (linear RGB) a loaded Mitsuba ``emitter`` sends back along the unit world
+    ``direction`` (the direction one looks in to see it)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.wi = mi.Vector3f(*[float(-x) for x in direction])
+    return np.array(emitter.eval(si)).ravel()
+
+
 def flat_sea_mesh(rings: int = 96, sectors: int = 128) -> MeshData:
     """The sea as a flat camera-centred polar grid at z = 0.
 

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from scipy import integrate
 
+from conftest import emitter_radiance
 from seahaze import overcast
 from seahaze.sceneio import SceneFileError, parse_scene_text
 
@@ -63,27 +64,18 @@ def overcast_spec():
     return parse_scene_text(text, str(SCENES / "overcast.yaml"))
 
 
-def _radiance(emitter, direction) -> np.ndarray:
-    import drjit as dr
-    import mitsuba as mi
-
-    si = dr.zeros(mi.SurfaceInteraction3f)
-    si.wi = mi.Vector3f(*[float(-x) for x in direction])
-    return np.array(emitter.eval(si)).ravel()
-
-
 def test_the_emitter_follows_the_gradation_upward_in_the_world(mitsuba_variant):
     import mitsuba as mi
 
     from seahaze.render.sky import overcast_dict
 
     emitter = mi.load_dict(overcast_dict(overcast_spec()))
-    zenith = _radiance(emitter, (0.0, 0.0, 1.0))
+    zenith = emitter_radiance(emitter, (0.0, 0.0, 1.0))
     for mu, azimuth in ((0.5, 0.3), (0.1, 2.0), (0.02, -1.2)):
         s = math.sqrt(1 - mu * mu)
-        seen = _radiance(emitter, (s * math.cos(azimuth), s * math.sin(azimuth), mu))
+        seen = emitter_radiance(emitter, (s * math.cos(azimuth), s * math.sin(azimuth), mu))
         np.testing.assert_allclose(seen / zenith, overcast.gradation(mu), rtol=1e-4)
-    assert np.all(_radiance(emitter, (0.6, 0.0, -0.8)) == 0.0)
+    assert np.all(emitter_radiance(emitter, (0.6, 0.0, -0.8)) == 0.0)
     assert zenith[0] == pytest.approx(zenith[2])
 
 

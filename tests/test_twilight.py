@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from scipy.ndimage import median_filter
 
+from conftest import emitter_radiance
 from seahaze import twilight
 from seahaze.overcast import REC709_LUMINANCE
 from seahaze.sceneio import SceneFileError, parse_scene_text
@@ -131,15 +132,6 @@ def twilight_spec(**sun):
     return spec.model_copy(update={"sun": spec.sun.model_copy(update=sun)}) if sun else spec
 
 
-def _radiance(emitter, direction) -> np.ndarray:
-    import drjit as dr
-    import mitsuba as mi
-
-    si = dr.zeros(mi.SurfaceInteraction3f)
-    si.wi = mi.Vector3f(*[float(-x) for x in direction])
-    return np.array(emitter.eval(si)).ravel()
-
-
 @pytest.mark.usefixtures("mitsuba_variant")
 @pytest.mark.parametrize("azimuth_deg", [-25.0, 110.0])
 def test_the_glow_lies_under_the_sun_in_the_world(azimuth_deg):
@@ -153,13 +145,13 @@ def test_the_glow_lies_under_the_sun_in_the_world(azimuth_deg):
     radiance = {}
     for name, turn in (("toward", 0.0), ("side", 90.0), ("away", 180.0)):
         a = math.radians(azimuth_deg + turn)
-        radiance[name] = _radiance(
+        radiance[name] = emitter_radiance(
             emitter, (math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e))
         )
     assert radiance["toward"][0] > 2 * radiance["side"][0] > 0
     assert radiance["toward"][0] > 3 * radiance["away"][0] > 0
     assert radiance["toward"][0] > radiance["toward"][2]
-    assert np.all(_radiance(emitter, (0.6, 0.0, -0.8)) == 0.0)
+    assert np.all(emitter_radiance(emitter, (0.6, 0.0, -0.8)) == 0.0)
     # No sun: its emitter is switched off.
     sun = sun_dict(spec)
     assert sun["sun_scale"] == 0.0 and sun["sky_scale"] == 0.0
