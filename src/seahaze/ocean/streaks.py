@@ -165,19 +165,43 @@ class FoamStreaks:
         v = v + MEANDER_M * noise_1d(u / MEANDER_LENGTH_M, np.zeros_like(u), seed)
         share = line_share(self.wind_speed)
         cell = np.floor(v / SPACING_M)
+        lines = _LineHashes(cell, seed)
         total = np.zeros_like(u)
         for offset in (-1.0, 0.0, 1.0):  # a jittered line may reach into a neighbour's cell
             k = cell + offset
-            centre = (k + 0.5 + JITTER * (hash_01(k, 1, seed) - 0.5)) * SPACING_M
-            width = WIDTH_M * (0.5 + hash_01(k, 2, seed))
+            centre = (k + 0.5 + JITTER * (lines.of(k, 1) - 0.5)) * SPACING_M
+            width = WIDTH_M * (0.5 + lines.of(k, 2))
             profile = np.exp(-(((v - centre) / width) ** 2))
             segment = noise_1d(u / SEGMENT_LENGTH_M, k, seed + 1)
             along = np.clip(segment / SEGMENT_FADE + 0.5, 0.0, 1.0)
-            present = hash_01(k, 3, seed) < share
-            density = BRIGHTNESS[0] + BRIGHTNESS[1] * hash_01(k, 4, seed)
+            present = lines.of(k, 3) < share
+            density = BRIGHTNESS[0] + BRIGHTNESS[1] * lines.of(k, 4)
             total = np.maximum(total, np.where(present, density * profile * along, 0.0))
         lace = value_noise(u / LACE_M[0], v / LACE_M[1], np.zeros_like(u), seed + 2)
         return total * 0.5 * (1.0 + lace)
+
+
+class _LineHashes:
+    """:func:`hash_01` of every line the points of ``cell`` (their lines' indices) may reach,
+    hashed once per line and channel instead of once per point: the same values."""
+
+    def __init__(self, cell: np.ndarray, seed: int) -> None:
+        tabulate = cell.size > 0 and bool(np.all(np.isfinite(cell)))
+        low, high = (cell.min() - 1.0, cell.max() + 1.0) if tabulate else (0.0, 0.0)
+        # Points spread over more lines than there are points (a sparse sample of a wide sea)
+        # are hashed one by one, as the table would be larger than the work it saves.
+        self._first = low if tabulate and high - low < cell.size else None
+        self._lines = np.arange(low, high + 1.0) if self._first is not None else None
+        self._seed = seed
+        self._tables: dict[int, np.ndarray] = {}
+
+    def of(self, k: np.ndarray, channel: int) -> np.ndarray:
+        """:func:`hash_01` of lines ``k`` and ``channel``."""
+        if self._first is None:
+            return hash_01(k, channel, self._seed)
+        if channel not in self._tables:
+            self._tables[channel] = hash_01(self._lines, channel, self._seed)
+        return self._tables[channel][(k - self._first).astype(np.intp)]
 
 
 def hash_01(k: np.ndarray, channel: int, seed: int) -> np.ndarray:
