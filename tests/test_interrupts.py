@@ -5,9 +5,9 @@ drjit compiles and runs a pass's kernel without returning to Python; a render ca
 main thread used to ignore the signal until the pass ended (12 minutes at 2000 spp). The signal
 comes a moment after the scene is loaded, while the pass compiles or runs. How soon the render
 stops is checked on a one pass of about 30 s on the project's 2-vCPU machine, far longer than
-the few seconds allowed; that the folder then resumes to an uninterrupted run's files, on a
-pass of about 6 s (and those files' own render), since the check does not depend on the
-pass's length and costs it twice more.
+the few seconds allowed. That an interrupted folder resumes to an uninterrupted run's files is
+checked on a pass of about 6 s: that check does not depend on the pass's length, and it renders
+the pass twice more (the resume and the uninterrupted run).
 """
 
 from __future__ import annotations
