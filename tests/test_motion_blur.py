@@ -170,7 +170,9 @@ def test_a_sequence_from_a_pitching_ship_is_blurred_in_its_pngs_only(tmp_path):
         scene = tmp_path / f"shake{shutter}.yaml"
         scene.write_text(SCENE.format(shutter=shutter))
         out = tmp_path / f"out{shutter}"
-        code, _, err = cli_run(["render", str(scene), "--out", str(out), "--quiet"])
+        # A render, not a hostile-input case: with an empty kernel cache on a busy machine
+        # it took 15 s, over the cases' 10 s limit for a hang.
+        code, _, err = cli_run(["render", str(scene), "--out", str(out), "--quiet"], 120)
         assert code == 0, err
         meta = json.loads(next((out / "meta").glob("*.json")).read_text())
         images[shutter] = (
