@@ -76,3 +76,40 @@ def test_samples_and_density_agree_with_fishers_closed_form(kappa: float) -> Non
         # The density's own integral over the cap, estimated from uniform directions.
         cap = np.mean(density * (cos_uniform > c)) * 4.0 * np.pi
         assert cap == pytest.approx(fisher, abs=0.02)
+
+
+@pytest.mark.usefixtures("mitsuba_variant")
+def test_the_lobe_serves_the_side_a_path_arrives_on_and_a_translucent_sheet_from_both() -> None:
+    """A vertical surface facing the sun's mirror image (normal toward it) draws toward the
+    lobe when the path arrives on its normal's side; met from behind (a sheet seen from its
+    other face, its normal away from the path) the same opaque surface faces away and does
+    not, while the same surface seen from the far side with its normal turned round does. A
+    translucent sheet can send the path through itself: it draws from either side."""
+    import drjit as dr
+    import mitsuba as mi
+
+    from seahaze.render.fleet import vessel_bsdf
+
+    sun = sun_direction(20.0, 0.0)
+    lobe = glint_lobe.GlintLobe(sun, wind_speed=6.0, share=0.7)
+    paint = {"type": "rgb", "value": [0.8, 0.8, 0.8]}
+    opaque = mi.load_dict(vessel_bsdf(0.4, paint))
+    cloth = mi.load_dict(vessel_bsdf(0.85, paint, 0.3))
+    axis = glint_lobe.mirror_axis(sun)
+    toward = np.array([axis[0], axis[1], 0.0]) / np.hypot(axis[0], axis[1])
+
+    def share(bsdf, normal_sign: float, arrive_from_normal_side: bool) -> float:
+        si = dr.zeros(mi.SurfaceInteraction3f, 1)
+        n = normal_sign * toward
+        si.n = mi.Normal3f(*(float(c) for c in n))
+        si.sh_frame = mi.Frame3f(si.n)
+        si.wi = mi.Vector3f(0.3, 0.0, 0.95 if arrive_from_normal_side else -0.95)
+        return float(lobe.share_at(si, bsdf, mi.Bool(True))[0])
+
+    assert share(opaque, 1.0, True) == pytest.approx(0.7)  # its lit side faces the lobe
+    assert share(opaque, 1.0, False) == 0.0  # met from behind: the side seen faces away
+    assert share(opaque, -1.0, False) == pytest.approx(0.7)  # seen from the lobe's side
+    assert share(opaque, -1.0, True) == 0.0
+    for normal_sign in (1.0, -1.0):
+        for arrive in (True, False):
+            assert share(cloth, normal_sign, arrive) == pytest.approx(0.7)

@@ -85,12 +85,17 @@ class GlintLobe:
 
     def share_at(self, si: Any, bsdf: Any, active: Any) -> Any:
         """The share of ``si``'s continuation directions drawn toward the glint: the lobe's
-        share on a surface that faces the sun's mirror image and has no delta lobe, 0
-        elsewhere (the sea itself: its normals point up, the glint down)."""
+        share on a surface with no delta lobe that can send the path toward the sun's mirror
+        image, 0 elsewhere (the sea itself: its normals point up, the glint down). An opaque
+        surface can where the side the path arrives on faces the mirror image (a closed body
+        is always seen from outside its normal; a sheet may be seen from either face); a
+        translucent sheet (a sail) can from either side, through itself."""
         import drjit as dr
         import mitsuba as mi
 
-        facing = dr.dot(si.n, self.axis) > 0.0
+        seen_side = dr.select(mi.Frame3f.cos_theta(si.wi) < 0.0, -1.0, 1.0)
+        through = mi.has_flag(bsdf.flags(), mi.BSDFFlags.DiffuseTransmission)
+        facing = through | (seen_side * dr.dot(si.n, self.axis) > 0.0)
         guided = active & facing & ~mi.has_flag(bsdf.flags(), mi.BSDFFlags.Delta)
         return dr.select(guided, self.share, 0.0)
 
