@@ -13,6 +13,7 @@ import pytest
 from seahaze import vessels
 from seahaze.render.fleet import (
     HIDDEN_DEPTH_M,
+    MATERIAL_CLASSES,
     ROUGHNESS_CLASSES,
     fleet_meshes,
     roughness_class,
@@ -77,10 +78,15 @@ def test_every_part_keeps_its_faces_paint_and_vessel() -> None:
     camera = frame_camera(spec, None)
     geometry = build_geometry(spec, camera, None)
     fleet = fleet_meshes(geometry.vessels, (camera.x_m, camera.y_m))
-    assert [m.roughness for m in fleet] == list(ROUGHNESS_CLASSES)
+    assert [(m.roughness, m.transmittance) for m in fleet] == list(MATERIAL_CLASSES)
     parts = [(v.index, p) for v in geometry.vessels for p in v.parts]
+    cloth = len(ROUGHNESS_CLASSES)
     for k, mesh in enumerate(fleet):
-        mine = [(i, p) for i, p in parts if roughness_class(p.roughness) == k]
+        mine = [
+            (i, p)
+            for i, p in parts
+            if (cloth if p.transmittance > 0.0 else roughness_class(p.roughness)) == k
+        ]
         if not mine:  # a placeholder: one small triangle far under the sea, nobody's
             assert mesh.face_vessel.tolist() == [-1]
             assert np.all(mesh.vertices[:, 2] == -HIDDEN_DEPTH_M)
@@ -191,16 +197,16 @@ def test_vessel_bsdfs_are_loaded_once_and_only_the_last_set_is_kept() -> None:
     pytest.importorskip("mitsuba")
     from seahaze.render import fleet
 
-    first = fleet.vessel_materials(ROUGHNESS_CLASSES)
-    again = fleet.vessel_materials(ROUGHNESS_CLASSES)
+    first = fleet.vessel_materials(fleet.MATERIAL_CLASSES)
+    again = fleet.vessel_materials(fleet.MATERIAL_CLASSES)
     assert all(a.bsdf is b.bsdf and a.paint is b.paint for a, b in zip(first, again, strict=True))
-    black = fleet.vessel_materials(ROUGHNESS_CLASSES, black=True)
+    black = fleet.vessel_materials(fleet.MATERIAL_CLASSES, black=True)
     assert not any(a.bsdf is b.bsdf for a, b in zip(first, black, strict=True))
     assert all(m.paint is None for m in black)  # black: nothing painted
     # The painted set was dropped: drjit would trace every live BSDF into the black scene's
     # kernel otherwise.
-    assert len(fleet.kept_bsdf_keys()) == len(ROUGHNESS_CLASSES)
-    assert {key[2] for key in fleet.kept_bsdf_keys()} == {True}
+    assert len(fleet.kept_bsdf_keys()) == len(fleet.MATERIAL_CLASSES)
+    assert {key[3] for key in fleet.kept_bsdf_keys()} == {True}
 
 
 def _loaded(text: str, name: str):

@@ -57,6 +57,9 @@ class MeshData:
     attributes: dict[str, np.ndarray] = field(default_factory=dict)
     """Per-vertex float32 ``(N,)`` attributes for the renderer (the sea's :data:`SEA_FOAM`,
     :data:`SEA_FOAM_REFLECTANCE`, :data:`SEA_NEAR_ROUGHNESS`)."""
+    transmittance: float = 0.0
+    """Share of its diffuse light a translucent sheet (a sail) passes through (0: opaque;
+    :attr:`seahaze.vessels.materials.Material.transmittance`)."""
 
 
 @dataclass
@@ -134,6 +137,8 @@ class SceneGeometry:
             h.update(np.ascontiguousarray(mesh.vertices, np.float32).tobytes())
             h.update(np.ascontiguousarray(mesh.faces, np.uint32).tobytes())
             h.update(np.asarray([*mesh.rgb, mesh.roughness], np.float64).tobytes())
+            if mesh.transmittance > 0.0:  # opaque meshes keep the digests they always had
+                h.update(np.float64(mesh.transmittance).tobytes())
             for key in sorted(mesh.attributes):
                 h.update(key.encode())
                 h.update(np.ascontiguousarray(mesh.attributes[key], np.float32).tobytes())
@@ -502,6 +507,7 @@ def build_vessels(
                 np.asarray(f, np.uint32),
                 tuple(mat.rgb),
                 mat.roughness,
+                transmittance=mat.transmittance,
             )
             for name, v, f, mat in parts
         ]

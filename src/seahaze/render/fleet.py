@@ -15,7 +15,9 @@ How
     paint texture (:class:`seahaze.render.mesh_textures.FacePaint`) from an array it holds. A
     class no vessel uses holds one small triangle far under the sea, which no ray reaches. Each
     mesh records which vessel every face belongs to (:attr:`FleetMesh.face_vessel`), so the
-    geometry pass tells the vessels apart by the hit's primitive index.
+    geometry pass tells the vessels apart by the hit's primitive index. Translucent sheets
+    (sails, :attr:`~seahaze.vessels.materials.Material.transmittance` above 0) join one more
+    mesh after the roughness classes, :data:`CLOTH_CLASS`, whose BSDF passes light through.
 
     drjit traces a BSDF virtual call once per BSDF; identical traces are compiled once. A paint
     read from the mesh (a per-vertex attribute) was a virtual call to the shape nested inside
@@ -43,12 +45,19 @@ from typing import Any
 
 import numpy as np
 
+from ..vessels.materials import SAIL_CLOTH, SAILCLOTH_TRANSMITTANCE
 from ..world import MeshData, VesselInstance
 from .mesh_textures import face_paint
 
 ROUGHNESS_CLASSES = (0.15, 0.3, 0.35, 0.4, 0.45, 0.5, 0.6, 0.65, 0.7, 0.8, 0.85)
 """Roughness of the vessel meshes: every roughness of the built-in vessels' materials
 (:mod:`seahaze.vessels`; a test keeps the two in step)."""
+CLOTH_CLASS = (SAIL_CLOTH[0].roughness, SAILCLOTH_TRANSMITTANCE)
+"""Roughness and transmittance of the translucent sheets' mesh (sails), the last class: every
+translucent built-in material's (a test keeps them in step)."""
+MATERIAL_CLASSES = (*((r, 0.0) for r in ROUGHNESS_CLASSES), CLOTH_CLASS)
+"""Roughness and transmittance of every vessel mesh, in order: the opaque roughness classes,
+then the cloth."""
 HIDDEN_DEPTH_M = 1000.0
 """Depth (m) under the sea of the placeholder triangle of an unused class."""
 MIN_ALPHA = 0.05
@@ -57,10 +66,13 @@ MIN_ALPHA = 0.05
 
 @dataclass(frozen=True)
 class FleetMesh:
-    """The vessel parts of one roughness class, merged, in world coordinates."""
+    """The vessel parts of one class (:data:`MATERIAL_CLASSES`), merged, in world
+    coordinates."""
 
     name: str
     roughness: float
+    transmittance: float
+    """0 for painted steel; the cloth class's sheets pass this share of their light."""
     vertices: np.ndarray
     """(N, 3) float32."""
     faces: np.ndarray
@@ -76,31 +88,44 @@ def roughness_class(roughness: float) -> int:
     return int(np.argmin([abs(roughness - c) for c in ROUGHNESS_CLASSES]))
 
 
+def material_class(part: MeshData) -> int:
+    """Index in :data:`MATERIAL_CLASSES` of the mesh ``part`` joins: the cloth for a
+    translucent sheet, else its nearest roughness class."""
+    if part.transmittance > 0.0:
+        return len(ROUGHNESS_CLASSES)
+    return roughness_class(part.roughness)
+
+
 def fleet_meshes(
     vessels: Sequence[VesselInstance], below_xy: tuple[float, float]
 ) -> list[FleetMesh]:
-    """One :class:`FleetMesh` per roughness class, in class order; an unused class holds a
-    placeholder triangle :data:`HIDDEN_DEPTH_M` under ``below_xy`` (m)."""
-    groups: list[list[tuple[int, MeshData]]] = [[] for _ in ROUGHNESS_CLASSES]
+    """One :class:`FleetMesh` per class of :data:`MATERIAL_CLASSES`, in class order; an unused
+    class holds a placeholder triangle :data:`HIDDEN_DEPTH_M` under ``below_xy`` (m)."""
+    groups: list[list[tuple[int, MeshData]]] = [[] for _ in MATERIAL_CLASSES]
     for vessel in vessels:
         for part in vessel.parts:
-            groups[roughness_class(part.roughness)].append((vessel.index, part))
+            groups[material_class(part)].append((vessel.index, part))
+    names = [f"vessels_r{k}" for k in range(len(ROUGHNESS_CLASSES))] + ["vessels_cloth"]
     return [
-        _merge(f"vessels_r{k}", ROUGHNESS_CLASSES[k], parts, below_xy)
-        for k, parts in enumerate(groups)
+        _merge(name, MATERIAL_CLASSES[k], parts, below_xy)
+        for k, (name, parts) in enumerate(zip(names, groups, strict=True))
     ]
 
 
 def _merge(
-    name: str, roughness: float, parts: list[tuple[int, MeshData]], below_xy: tuple[float, float]
+    name: str,
+    material: tuple[float, float],
+    parts: list[tuple[int, MeshData]],
+    below_xy: tuple[float, float],
 ) -> FleetMesh:
+    roughness, transmittance = material
     if not parts:
         x, y = below_xy
         z = -HIDDEN_DEPTH_M
         vertices = np.array([[x, y, z], [x + 0.01, y, z], [x, y + 0.01, z]], np.float32)
         faces = np.array([[0, 1, 2]], np.uint32)
         paint, nobody = np.zeros((1, 3), np.float32), np.full(1, -1, np.int32)
-        return FleetMesh(name, roughness, vertices, faces, paint, nobody)
+        return FleetMesh(name, roughness, transmittance, vertices, faces, paint, nobody)
     offsets = np.cumsum([0] + [len(part.vertices) for _, part in parts])
     vertices = np.concatenate([part.vertices for _, part in parts]).astype(np.float32)
     faces = np.concatenate(
@@ -112,7 +137,7 @@ def _merge(
     face_vessel = np.concatenate(
         [np.full(len(part.faces), index, np.int32) for index, part in parts]
     )
-    return FleetMesh(name, roughness, vertices, faces, paint, face_vessel)
+    return FleetMesh(name, roughness, transmittance, vertices, faces, paint, face_vessel)
 
 
 def vessel_spheres(fleet: Sequence[FleetMesh], n_vessels: int) -> np.ndarray:
@@ -133,14 +158,29 @@ def vessel_spheres(fleet: Sequence[FleetMesh], n_vessels: int) -> np.ndarray:
     return spheres
 
 
-def vessel_bsdf(roughness: float, paint: Any = None) -> dict:
+def vessel_bsdf(roughness: float, paint: Any = None, transmittance: float = 0.0) -> dict:
     """Painted steel — a dielectric varnish (GGX ``alpha`` = roughness, at least
     :data:`MIN_ALPHA`) over the paint texture ``paint`` (a
     :class:`~seahaze.render.mesh_textures.FacePaint`) — or, without
     one, a surface that reflects nothing (``seahaze verify``'s black targets: painted steel of
-    zero paint still reflects the sky off its varnish)."""
+    zero paint still reflects the sky off its varnish).
+
+    With ``transmittance`` above 0, cloth: Mitsuba's thin principled BSDF (Burley 2015,
+    "Extending the Disney BRDF to a BSDF with integrated subsurface scattering", SIGGRAPH
+    course notes), a two-sided sheet whose diffuse light, of albedo ``paint``, goes
+    ``transmittance`` through to the other side and the rest back (its ``diff_trans`` is twice
+    that share), with a rough dielectric reflection (GGX, of Disney roughness ``roughness``)
+    on both faces."""
     if paint is None:
         return {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
+    if transmittance > 0.0:
+        return {
+            "type": "principledthin",
+            "base_color": paint,
+            "roughness": roughness,
+            "diff_trans": 2.0 * transmittance,
+            "spec_trans": 0.0,
+        }
     return {
         "type": "roughplastic",
         "distribution": "ggx",
@@ -157,19 +197,23 @@ class VesselMaterial:
     paint: Any
 
 
-_LOADED: dict[tuple[str, float, bool], VesselMaterial] = {}
-"""The vessel materials of the last scene, by (variant, roughness, black): kept for the next."""
+_LOADED: dict[tuple[str, float, float, bool], VesselMaterial] = {}
+"""The vessel materials of the last scene, by (variant, roughness, transmittance, black): kept
+for the next."""
 
 
-def kept_bsdf_keys() -> list[tuple[str, float, bool]]:
-    """The keys (kind, roughness, black) of the vessel BSDFs kept loaded from the last scene
-    (:func:`vessel_materials`)."""
+def kept_bsdf_keys() -> list[tuple[str, float, float, bool]]:
+    """The keys (variant, roughness, transmittance, black) of the vessel BSDFs kept loaded from
+    the last scene (:func:`vessel_materials`)."""
     return list(_LOADED)
 
 
-def vessel_materials(roughnesses: Sequence[float], black: bool = False) -> list[VesselMaterial]:
-    """The loaded materials of :func:`vessel_bsdf` for ``roughnesses``, the same objects as the
-    previous scene's where it had them.
+def vessel_materials(
+    classes: Sequence[tuple[float, float]], black: bool = False
+) -> list[VesselMaterial]:
+    """The loaded materials of :func:`vessel_bsdf` for ``classes`` (roughness and
+    transmittance of each, as :data:`MATERIAL_CLASSES`), the same objects as the previous
+    scene's where it had them.
 
     Loading a roughplastic tabulates its coat's transmittance (a kernel launch), the same for
     every scene (docs/benchmarks.md, "Design measurements"). Only the
@@ -178,13 +222,14 @@ def vessel_materials(roughnesses: Sequence[float], black: bool = False) -> list[
     """
     import mitsuba as mi
 
-    keys = [(mi.variant(), float(r), bool(black)) for r in roughnesses]
+    keys = [(mi.variant(), float(r), float(t), bool(black)) for r, t in classes]
     for stale in set(_LOADED) - set(keys):
         del _LOADED[stale]
     for key in keys:
         if key not in _LOADED:
+            _, roughness, transmittance, _ = key
             paint = None if black else face_paint()
-            bsdf = mi.load_dict(vessel_bsdf(key[1], paint))
+            bsdf = mi.load_dict(vessel_bsdf(roughness, paint, transmittance))
             _LOADED[key] = VesselMaterial(bsdf, paint)
     return [_LOADED[key] for key in keys]
 

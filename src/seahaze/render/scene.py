@@ -435,7 +435,9 @@ def build_scene(
     # and the ids of every scene's BSDFs (which its kernel is traced over) are those of a
     # fresh process rendering that scene alone.
     fleet = fleet_meshes(geometry.vessels, (camera.x_m, camera.y_m))
-    materials = vessel_materials([part.roughness for part in fleet], black_vessels)
+    materials = vessel_materials(
+        [(part.roughness, part.transmittance) for part in fleet], black_vessels
+    )
     streaks = sea_streaks(spec, geometry.elapsed_s)
     surfaces = {"sea": _sea_mesh(geometry.sea, sea_surface_bsdf(spec, geometry, streaks))}
     for part, material in zip(fleet, materials, strict=True):

@@ -4,8 +4,9 @@ The hull is a *lofted* closed surface: a family of transverse sections (stations
 each a closed loop port-side-down / starboard-side-up, joined by quads and closed by a
 transom cap at the stern and a small stem cap at the bow. Every other part is either a
 trimesh primitive (box, cylinder, icosphere) or the convex hull of a handful of points, which
-is watertight by construction. Parts made of several bodies are concatenations of disjoint
-watertight bodies (no vertex is shared, so each body keeps its own closed edge set).
+is watertight by construction; a sail (:func:`cambered_sail`), a translucent sheet, is the
+one open body. Parts made of several bodies are concatenations of disjoint bodies (no vertex
+is shared, so each watertight body keeps its own closed edge set).
 
 Frame: x forward (bow at +L/2), y to port, z up, waterline z = 0. Units: metres.
 """
@@ -21,6 +22,7 @@ import trimesh
 __all__ = [
     "HullForm",
     "box",
+    "cambered_sail",
     "concatenate",
     "cone",
     "convex_body",
@@ -30,7 +32,6 @@ __all__ = [
     "prism_from_outline",
     "sphere",
     "tapered_block",
-    "thin_triangle",
     "vertical_cylinder",
 ]
 
@@ -381,15 +382,51 @@ def sphere(x: float, y: float, z: float, radius: float) -> trimesh.Trimesh:
     return mesh
 
 
-def thin_triangle(
-    p0: Sequence[float], p1: Sequence[float], p2: Sequence[float], thickness: float
+SAIL_DIVISIONS = 8
+"""Rows of triangles from a sail's foot to its head (and across its foot) in
+:func:`cambered_sail`: ``SAIL_DIVISIONS²`` faces."""
+
+
+def cambered_sail(
+    tack: Sequence[float],
+    head: Sequence[float],
+    clew: Sequence[float],
+    depth: float,
+    leeward: Sequence[float],
 ) -> trimesh.Trimesh:
-    """Triangle plate with a small thickness (a sail): watertight triangular prism."""
-    pts = np.array([p0, p1, p2], dtype=np.float64)
-    normal = np.cross(pts[1] - pts[0], pts[2] - pts[0])
+    """A triangular sail as a single sheet with camber: its luff (tack to head) and leech (clew
+    to head) lie on the flat triangle, and between them every horizontal chord bows to the
+    ``leeward`` side (a direction) by ``depth`` (a share of the chord's length, 0.08-0.15 for
+    a trimmed sail) at mid-chord, as a parabola, ``4·depth·c·u(1 - u)`` at the share ``u`` of
+    the chord ``c`` from the luff. The belly is what makes a set sail shade from luff to leech
+    in a photograph; a flat triangle is one tone. One sheet, seen and lit from both sides: a
+    translucent material (:attr:`~seahaze.vessels.materials.Material.transmittance`) lets
+    light through it in one crossing, where a closed plate would need two, which the
+    renderer's light sampling cannot connect to the sun."""
+    tack, head, clew = (np.asarray(p, np.float64) for p in (tack, head, clew))
+    normal = np.cross(clew - tack, head - tack)
     normal /= np.linalg.norm(normal)
-    offset = 0.5 * thickness * normal
-    return convex_body(np.vstack([pts + offset, pts - offset]))
+    if np.dot(normal, np.asarray(leeward, np.float64)) < 0.0:
+        normal = -normal
+    foot = float(np.linalg.norm(clew - tack))
+    n = SAIL_DIVISIONS
+    index: dict[tuple[int, int], int] = {}
+    vertices = []
+    for j in range(n + 1):  # rows up the sail: the share v = j/n of the way to the head
+        for i in range(n + 1 - j):  # along the chord: a = i/n of the foot
+            a, v = i / n, j / n
+            u = a / (1.0 - v) if v < 1.0 else 0.0
+            flat = tack + a * (clew - tack) + v * (head - tack)
+            belly = 4.0 * depth * foot * (1.0 - v) * u * (1.0 - u)
+            index[i, j] = len(vertices)
+            vertices.append(flat + belly * normal)
+    faces = []
+    for j in range(n):
+        for i in range(n - j):
+            faces.append((index[i, j], index[i + 1, j], index[i, j + 1]))
+            if i + 1 <= n - j - 1:
+                faces.append((index[i + 1, j], index[i + 1, j + 1], index[i, j + 1]))
+    return trimesh.Trimesh(np.asarray(vertices), np.asarray(faces), process=False)
 
 
 def concatenate(meshes: Sequence[trimesh.Trimesh]) -> trimesh.Trimesh:

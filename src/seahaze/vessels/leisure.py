@@ -8,15 +8,17 @@ to each draw. Metres throughout; vessel frame x forward, y port, z up, waterline
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from seahaze.vessels.geometry import (
     HullForm,
     box,
+    cambered_sail,
     convex_body,
     cylinder_between,
     tapered_block,
-    thin_triangle,
 )
 from seahaze.vessels.materials import (
     ANTIFOULING_REDS,
@@ -134,7 +136,8 @@ def build_sailboat(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPar
     if sails_set:
         cloth = pick_material(SAIL_CLOTH, rng)
         head = (x_mast - mast_r, 0.0, deck_m + 0.97 * mast_h)
-        parts.add("sail_main", thin_triangle(tack, head, clew, 0.03), cloth)
+        leeward = (0.0, side, 0.0)
+        parts.add("sail_main", cambered_sail(tack, head, clew, MAIN_CAMBER, leeward), cloth)
         jib_tack = (
             form.half_length - 0.03 * length,
             0.0,
@@ -148,12 +151,19 @@ def build_sailboat(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPar
             swung = (jib_tack[0] - jib_x) * abs(np.sin(angle))
             jib_reach = float(np.clip(swung, 0.15 * beam, 0.6 * beam))
         jib_clew = (jib_x, side * jib_reach, deck_m + 0.6)
-        parts.add("sail_jib", thin_triangle(jib_tack, jib_head, jib_clew, 0.03), cloth)
+        jib = cambered_sail(jib_tack, jib_head, jib_clew, JIB_CAMBER, leeward)
+        parts.add("sail_jib", jib, cloth)
     else:
-        cover = pick_material(FUNNEL_PAINTS[1:2] + SAIL_CLOTH[2:], rng)
+        # A stowed sail's cover is a closed body of heavy canvas: opaque.
+        cover = replace(pick_material(FUNNEL_PAINTS[1:2] + SAIL_CLOTH[2:], rng), transmittance=0.0)
         parts.add("sail_cover", cylinder_between(tack, clew, 2.5 * mast_r), cover)
     return parts.to_parts()
 
+
+MAIN_CAMBER = 0.10
+JIB_CAMBER = 0.12
+"""Depth of a set sail's belly at mid-chord, a share of the chord (the sailmaker's "draft"):
+trimmed cruising sails carry some 8-12 % in the main and 10-15 % in a headsail."""
 
 NO_GO_DEG = 40.0
 """A sloop cannot sail closer to the wind than about this many degrees off the bow (the "no-go

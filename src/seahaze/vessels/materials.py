@@ -8,12 +8,16 @@ IEC 61966-2-1 transfer function.
 Albedo caveat: real white marine paint reflects roughly 80 % of visible light and black
 hull paint 3-5 %, so the palettes never reach 0 or 1 in linear space. Roughness is the
 microfacet roughness of a plastic / painted-steel BSDF (0 = mirror, 1 = chalky).
+
+Sailcloth is the one translucent material: a sail is a single sheet, and a sail with the sun
+behind it glows with the light it lets through (a photograph's backlit sail is bright, not a
+dark shape). Its :attr:`Material.transmittance` is :data:`SAILCLOTH_TRANSMITTANCE`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -26,6 +30,7 @@ __all__ = [
     "HULL_PAINTS_CARGO",
     "HULL_PAINTS_SMALL",
     "MACHINERY_PAINTS",
+    "SAILCLOTH_TRANSMITTANCE",
     "SAIL_CLOTH",
     "SUPERSTRUCTURE_WHITES",
     "WINDOW_GLASS",
@@ -38,11 +43,15 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Material:
-    """Diffuse albedo (linear sRGB, each channel in [0, 1]) and roughness of one surface."""
+    """Diffuse albedo (linear sRGB, each channel in [0, 1]) and roughness of one surface, and
+    the share of its diffuse light a thin sheet of it passes to its other side
+    (``transmittance``, 0-1; 0: opaque paint, the surface of a closed body; above 0: a single
+    sheet, lit from either side)."""
 
     name: str
     rgb: tuple[float, float, float]
     roughness: float = 0.5
+    transmittance: float = 0.0
 
     def __post_init__(self) -> None:
         if len(self.rgb) != 3 or not all(0.0 <= c <= 1.0 for c in self.rgb):
@@ -51,6 +60,8 @@ class Material:
             )
         if not 0.0 <= self.roughness <= 1.0:
             raise ValueError(f"material {self.name!r}: roughness must be in [0, 1]")
+        if not 0.0 <= self.transmittance <= 1.0:
+            raise ValueError(f"material {self.name!r}: transmittance must be in [0, 1]")
 
 
 def srgb_to_linear(srgb: Sequence[float] | np.ndarray) -> np.ndarray:
@@ -59,10 +70,13 @@ def srgb_to_linear(srgb: Sequence[float] | np.ndarray) -> np.ndarray:
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-def material_from_srgb8(name: str, srgb8: Sequence[int], roughness: float = 0.5) -> Material:
+def material_from_srgb8(
+    name: str, srgb8: Sequence[int], roughness: float = 0.5, transmittance: float = 0.0
+) -> Material:
     """Build a :class:`Material` from an 8-bit sRGB triple such as ``(200, 30, 30)``."""
     lin = srgb_to_linear(np.asarray(srgb8[:3], dtype=np.float64) / 255.0)
-    return Material(name, (float(lin[0]), float(lin[1]), float(lin[2])), float(roughness))
+    rgb = (float(lin[0]), float(lin[1]), float(lin[2]))
+    return Material(name, rgb, float(roughness), float(transmittance))
 
 
 def pick_material(
@@ -76,14 +90,18 @@ def pick_material(
     base = palette[int(rng.integers(len(palette)))]
     scale = 1.0 + rng.uniform(-jitter, jitter, size=3)
     rgb = np.clip(np.asarray(base.rgb) * scale, 0.0, 1.0)
-    return Material(base.name, (float(rgb[0]), float(rgb[1]), float(rgb[2])), base.roughness)
+    return replace(base, rgb=(float(rgb[0]), float(rgb[1]), float(rgb[2])))
 
 
 def _palette(
-    prefix: str, entries: dict[str, tuple[int, int, int]], roughness: float
+    prefix: str,
+    entries: dict[str, tuple[int, int, int]],
+    roughness: float,
+    transmittance: float = 0.0,
 ) -> tuple[Material, ...]:
     return tuple(
-        material_from_srgb8(f"{prefix}_{key}", rgb, roughness) for key, rgb in entries.items()
+        material_from_srgb8(f"{prefix}_{key}", rgb, roughness, transmittance)
+        for key, rgb in entries.items()
     )
 
 
@@ -187,10 +205,21 @@ CONTAINER_COLOURS = _palette(
 # pixels; a dark low-roughness plastic gives the typical dark window band).
 WINDOW_GLASS = (material_from_srgb8("window", (22, 28, 36), 0.15),)
 
+SAILCLOTH_TRANSMITTANCE = 0.3
+"""Share of the diffuse light falling on one side of a sail that leaves the other side. Woven
+polyester (Dacron) cruising sailcloth is visibly translucent: the sun behind a sail shows as
+a glow through it. No measured transmittance of sailcloth was found to cite; 0.3 is a visual
+choice that makes a backlit white sail read as a bright shape against the sea, as in
+photographs (docs/vessels.md)."""
+
+# The sailcloth colours are the cloth's whole diffuse albedo, what it reflects and what it
+# lets through together: polyester absorbs little, so a white sail scatters some 95 % of the
+# light, (1 - SAILCLOTH_TRANSMITTANCE) of it back to the lit side.
 SAIL_CLOTH = _palette(
     "sail",
-    {"white": (235, 235, 230), "cream": (230, 222, 200), "grey": (190, 190, 185)},
+    {"white": (250, 250, 246), "cream": (245, 237, 214), "grey": (205, 205, 200)},
     roughness=0.85,
+    transmittance=SAILCLOTH_TRANSMITTANCE,
 )
 
 # IALA signal colours (IALA Recommendation E-108 surface colours, approximated in sRGB).

@@ -97,7 +97,8 @@ class PartSet:
         self._materials: dict[str, Material] = {}
 
     def add(self, name: str, mesh: trimesh.Trimesh, material: Material) -> None:
-        """Add one watertight body to part ``name`` (which must keep a single material)."""
+        """Add one watertight body to part ``name`` (which must keep a single material), or a
+        single sheet of a translucent material (a sail)."""
         known = self._materials.setdefault(name, material)
         if known != material:
             raise ValueError(f"part {name!r} already uses material {known.name!r}")
