@@ -161,9 +161,10 @@ def build_sailboat(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPar
 
 
 MAIN_CAMBER = 0.10
+"""Depth of a set mainsail's belly at mid-chord, a share of the chord (the sailmaker's
+"draft"): trimmed cruising mainsails carry some 8-12 %."""
 JIB_CAMBER = 0.12
-"""Depth of a set sail's belly at mid-chord, a share of the chord (the sailmaker's "draft"):
-trimmed cruising sails carry some 8-12 % in the main and 10-15 % in a headsail."""
+"""The same for the jib: headsails are cut fuller, some 10-15 %."""
 
 NO_GO_DEG = 40.0
 """A sloop cannot sail closer to the wind than about this many degrees off the bow (the "no-go
