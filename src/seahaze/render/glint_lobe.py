@@ -93,10 +93,11 @@ class GlintLobe:
         import drjit as dr
         import mitsuba as mi
 
+        flags = bsdf.flags()
         seen_side = dr.select(mi.Frame3f.cos_theta(si.wi) < 0.0, -1.0, 1.0)
-        through = mi.has_flag(bsdf.flags(), mi.BSDFFlags.DiffuseTransmission)
+        through = mi.has_flag(flags, mi.BSDFFlags.DiffuseTransmission)
         facing = through | (seen_side * dr.dot(si.n, self.axis) > 0.0)
-        guided = active & facing & ~mi.has_flag(bsdf.flags(), mi.BSDFFlags.Delta)
+        guided = active & facing & ~mi.has_flag(flags, mi.BSDFFlags.Delta)
         return dr.select(guided, self.share, 0.0)
 
     def continuation_pdf(self, share: Any, bsdf_pdf: Any, d: Any) -> Any:
