@@ -137,7 +137,7 @@ def _numbers_close(a: Any, b: Any, where: str) -> None:
 
 JSON_FROM_RADIANCE = ("meta", "dataset.json", "coco", "coco_visible")
 """Files holding numbers measured on the linear images (contrasts; COCO copies them from
-meta): compared to float precision, as the EXRs."""
+meta): compared to float precision on a GPU, as the EXRs."""
 
 
 def _assert_pngs_within_one_level(ours: Path, reference: Path) -> None:
@@ -153,17 +153,17 @@ def _assert_pngs_within_one_level(ours: Path, reference: Path) -> None:
 
 
 def _assert_same_dataset(ours: Path, reference: Path, variant: str) -> None:
-    """The resumed folder holds what an uninterrupted run writes: every file, the PNGs, labels
-    and depth byte for byte. The linear EXRs (and the numbers meta and dataset.json derive from
-    them) are compared to float precision: at 1024 spp and more, two uninterrupted renders can
-    differ in their last bits (docs/limits.md, "Reproducibility"), a fault apart from resuming.
+    """The resumed folder holds what an uninterrupted run writes, every file byte for byte.
     Under ``cuda_ad_rgb`` the GPU adds samples into pixels in no fixed order, so two runs
-    differ in the last bits at any sample count, and a PNG pixel can round one code value
-    apart: there the PNGs are compared to that."""
+    differ in the last bits of the linear EXRs (and of the numbers meta and dataset.json derive
+    from them), and a PNG pixel can round one code value apart: there those are compared to
+    float precision and to one code value (docs/limits.md, "Reproducibility")."""
     a, b = _tree(ours), _tree(reference)
     assert a.keys() == b.keys()
     for rel in a:
-        if rel.endswith(".png") and variant.startswith("cuda"):
+        if not variant.startswith("cuda"):
+            assert a[rel] == b[rel], rel
+        elif rel.endswith(".png"):
             _assert_pngs_within_one_level(ours / rel, reference / rel)
         elif rel.startswith("exr/"):
             x, y = read_exr(ours / rel), read_exr(reference / rel)

@@ -100,14 +100,16 @@ class StratifiedSampler:
             setattr(self, name, fields.get(name, kind()))
 
     @classmethod
-    def seeded(cls, spp: int, seed: int, wavefront: int) -> StratifiedSampler:
+    def seeded(cls, spp: int, seed: int, samples: int | Any) -> StratifiedSampler:
         """A sampler of ``spp`` samples per pixel (which Mitsuba's grid must hold exactly:
-        :func:`grid_of`) for ``wavefront`` lanes, seeded as Mitsuba seeds ``multijitter`` with
-        ``seed`` (its base seed 0)."""
+        :func:`grid_of`) seeded as Mitsuba seeds ``multijitter`` with ``seed`` (its base seed
+        0). ``samples``: each lane's sample, ``pixel·spp + index`` (``UInt32``), where Mitsuba's
+        sampler would take that lane of its wavefront; or a wavefront size ``n``, lanes
+        ``0 … n−1`` drawing samples ``0 … n−1`` as Mitsuba's do."""
         columns, rows = grid_of(spp)
         if columns * rows != spp:
             raise ValueError(f"{spp} samples do not fill a {columns} x {rows} grid")
-        lane = dr.arange(mi.UInt32, wavefront)
+        lane = dr.arange(mi.UInt32, samples) if isinstance(samples, int) else samples
         seed_value = dr.opaque(mi.UInt32, seed)
         v0, v1 = mi.sample_tea_32(seed_value, lane)
         count = dr.opaque(mi.UInt32, spp)

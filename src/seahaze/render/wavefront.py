@@ -6,15 +6,20 @@ the kernel as constants, so every new image size compiles the camera pass again:
 kernels seahaze has, seconds to tens of seconds of LLVM time each on a small machine
 (docs/benchmarks.md, "What does a new image size or sample count compile?"). :func:`render_film`
 is that loop for what seahaze renders (one pass of ``spp`` samples per pixel, a pinhole camera,
-a box-filtered RGB film) with those numbers passed as opaque values. It draws the same samples
-in the same order as Mitsuba's loop, so its images equal ``mi.render``'s to the rounding of each
-pixel's sum (Mitsuba's film orders the additions by its own rules; ``tests/test_wavefront.py``),
-and every image of up to 256×256 pixels, and above that every image size whose pixel count lies
-in the same octave, shares one compiled kernel (the per-thread sums' length is the one size left
-in it: :func:`pixel_sum_capacity`). The sums are drjit's per-thread ones, as in Mitsuba's film,
-so its reproducibility is the film's: the same bytes for the same seed on the CPU, with the
-exception docs/limits.md states; on a GPU the adds are atomic and their order varies in the last
-bits.
+a box-filtered RGB film) with those numbers passed as opaque values. Every image of up to
+256×256 pixels, and above that every image size whose pixel count lies in the same octave,
+shares one compiled kernel (the per-thread sums' length is the one size left in it:
+:func:`pixel_sum_capacity`).
+
+The samples are summed into each pixel by drjit's scatter-add into per-thread copies of the
+image, as in Mitsuba's film, but laid out among the kernel's lanes so that no pixel's samples
+are split between two of the threads' blocks (:mod:`seahaze.render.sample_blocks`): on the CPU
+the same seed gives the same bytes from run to run, and with seahaze's sampler whatever the
+thread count. Where that layout keeps Mitsuba's (a sample count that divides drjit's blocks, or
+a small image) the samples are Mitsuba's own, and the images equal ``mi.render``'s to the
+rounding of each pixel's sum (its film orders the additions by its own rules;
+``tests/test_wavefront.py``). On a GPU the adds are atomic and their order varies in the last
+bits (docs/limits.md, "Reproducibility").
 
 Mitsuba's samplers write the sample count into the kernel too (``multijitter`` permutes within a
 grid of that many cells); the ``physical`` mode's integrators draw instead from
@@ -26,6 +31,8 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+
+from .sample_blocks import SampleLayout, plain_layout, sample_layout
 
 
 def render_film(
@@ -55,18 +62,18 @@ def render_film(
         raise ValueError("render_film takes a sensor with an instantaneous shutter")
     width, height = (int(v) for v in film.crop_size())
     n_pixels = width * height
+    sampler = None if stratified else sensor.sampler().clone()
+    layout = _layout(n_pixels, spp, sampler)
+    pixel, sample, summed = _lane_samples(layout)
     if stratified:
         from .stratified import StratifiedSampler
 
-        sampler = StratifiedSampler.seeded(spp, seed, n_pixels * spp)
+        sampler = StratifiedSampler.seeded(spp, seed, pixel * dr.opaque(mi.UInt32, spp) + sample)
     else:
-        sampler = sensor.sampler().clone()
         sampler.set_sample_count(spp)
         sampler.set_samples_per_wavefront(spp)
-        sampler.seed(dr.opaque(mi.UInt32, seed), n_pixels * spp)
+        sampler.seed(dr.opaque(mi.UInt32, seed), layout.lanes)
 
-    # Samples of one pixel are neighbours in the wavefront, as in Mitsuba's loop.
-    pixel = dr.arange(mi.UInt32, n_pixels * spp) // dr.opaque(mi.UInt32, spp)
     row = pixel // dr.opaque(mi.UInt32, width)
     position = mi.Point2f(mi.Float(pixel - row * dr.opaque(mi.UInt32, width)), mi.Float(row))
     film_scale = mi.Point2f(dr.opaque(mi.Float, 1.0 / width), dr.opaque(mi.Float, 1.0 / height))
@@ -81,7 +88,7 @@ def render_film(
     capacity = pixel_sum_capacity(n_pixels)
     sums = [dr.zeros(mi.Float, capacity) for _ in channels]
     for total, value in zip(sums, channels, strict=True):
-        dr.scatter_reduce(dr.ReduceOp.Add, total, value, pixel)
+        dr.scatter_reduce(dr.ReduceOp.Add, total, value, pixel, summed)
     # Compile and run the pass here, in drjit's eval and sync, which let go of Python's lock.
     # Reading a scatter's target (the division below, numpy's copy) would do both holding it,
     # and seahaze.interrupts' watcher thread, which ends the process on Ctrl-C during a
@@ -96,6 +103,41 @@ def render_film(
     dr.sync_thread()
     image = np.stack([np.array(mean, dtype=np.float32)[:n_pixels] for mean in means], axis=-1)
     return image.reshape(height, width, len(channels))
+
+
+def _layout(n_pixels: int, spp: int, sampler: Any) -> SampleLayout:
+    """The lanes of the render's samples: whole pixels in each of drjit's blocks on the CPU
+    (:func:`~seahaze.render.sample_blocks.sample_layout`; a Mitsuba ``sampler`` draws by
+    lane, seahaze's, None here, by sample), the plain layout on a GPU, whose adds are atomic
+    whatever the layout."""
+    import drjit as dr
+    import mitsuba as mi
+
+    if not mi.variant().startswith("llvm"):
+        return plain_layout(n_pixels, spp)
+    return sample_layout(n_pixels, spp, dr.thread_count(), lane_groups=sampler is not None)
+
+
+def _lane_samples(layout: SampleLayout) -> tuple[Any, Any, Any]:
+    """Each lane's pixel and sample index under ``layout`` and whether it is summed (not
+    padding; a padding lane traces pixel 0's ray). The layout's numbers are opaque: every
+    layout shares the kernel."""
+    import drjit as dr
+    import mitsuba as mi
+
+    spp = dr.opaque(mi.UInt32, layout.spp)
+    block_lanes = dr.opaque(mi.UInt32, layout.block_lanes)
+    samples_per_block = dr.opaque(mi.UInt32, layout.pixels_per_block * layout.spp)
+    lane = dr.arange(mi.UInt32, layout.lanes)
+    block = lane // block_lanes
+    # SampleLayout.shift in the kernel; lanes before it wrap to large offsets (padding).
+    shift = (
+        block * dr.opaque(mi.UInt32, layout.shift_step) % dr.opaque(mi.UInt32, layout.shift_modulus)
+    )
+    offset = lane - block * block_lanes - shift
+    pixel = block * dr.opaque(mi.UInt32, layout.pixels_per_block) + offset // spp
+    summed = (offset < samples_per_block) & (pixel < dr.opaque(mi.UInt32, layout.n_pixels))
+    return dr.select(summed, pixel, 0), offset % spp, summed
 
 
 SMALLEST_SUM_CAPACITY = 1 << 16
