@@ -88,10 +88,21 @@ def test_the_padding_stays_small_and_powers_of_two_need_none():
             layout = sample_layout(1280 * 720, spp, 4, lane_groups=lane_groups)
             assert layout.padding == 0
             assert np.array_equal(_pixel_starts(layout), np.arange(1280 * 720) * spp)
-    # One thread takes two threads' layout (its bytes are theirs); no block holds a pixel of
-    # more samples than its lanes: the plain layout, whose pixels straddle anyway.
-    assert sample_layout(9216, 42, 1) == sample_layout(9216, 42, 2)
+    # No block holds a pixel of more samples than its lanes: the plain layout, whose pixels
+    # straddle anyway.
     assert sample_layout(10, BLOCK_LANES + 1, 4) == plain_layout(10, BLOCK_LANES + 1)
+
+
+@pytest.mark.parametrize("lane_groups", [False, True], ids=["by-sample", "by-lane"])
+def test_every_sample_keeps_its_lane_whatever_the_thread_count(lane_groups):
+    # Only the padding at the end depends on the threads: a sampler that draws by lane takes
+    # the same numbers on any machine, and a small image is padded, not laid out anew.
+    for n_pixels, spp in itertools.product([7, 2304, 9216, 57_600], [3, 25, 42, 64]):
+        layouts = [sample_layout(n_pixels, spp, t, lane_groups=lane_groups) for t in (1, 2, 16)]
+        starts = [_pixel_starts(layout) for layout in layouts]
+        assert all(np.array_equal(s, starts[0]) for s in starts[1:]), (n_pixels, spp)
+        # More than 2·16 blocks of B lanes at 16 threads: drjit's fourth rule.
+        assert layouts[-1].lanes > 2 * 16 * BLOCK_LANES
 
 
 @pytest.mark.parametrize("bad", [(0, 4, 2), (10, 0, 2), (10, 4, 0)])
@@ -137,16 +148,15 @@ def _renders(spp: int, resolution: tuple[int, int], stratified: bool, threads: l
 )
 def test_seahazes_sampler_gives_the_same_bytes_at_every_thread_count(spp, resolution):
     # 128×72 at 42 samples: 23 block ends fell inside a pixel before, and two renders differed
-    # in 24 of these 27,648 values; at 2 to 7 threads each block goes to whichever is free, and
-    # at 16 drjit makes 32 equal blocks of that image instead (its third rule).
+    # in 24 of these 27,648 values; at 2 to 16 threads each block goes to whichever is free.
     one, *more = _renders(spp, resolution, True, [1, 2, 4, 7, 16, 2])
     for image in more:
         np.testing.assert_array_equal(image, one)
 
 
 @pytest.mark.usefixtures("mitsuba_variant")
-def test_mitsubas_sampler_gives_the_same_bytes_from_run_to_run():
-    first, *more = _renders(42, (128, 72), False, [2, 2, 4, 1])
+def test_mitsubas_sampler_gives_the_same_bytes_at_every_thread_count():
+    first, *more = _renders(42, (128, 72), False, [2, 2, 4, 1, 16])
     for image in more:
         np.testing.assert_array_equal(image, first)
 

@@ -20,25 +20,25 @@ power of two, never.
 :func:`sample_layout` lays the samples out so that every block holds whole pixels. Each block of
 ``B`` lanes takes as many whole pixels as fit, shifted from its start by a few lanes (its
 :meth:`SampleLayout.shift`); the lanes left over (fewer than a pixel's samples plus the largest
-shift: 46 of 16,384 at 42 samples, none at a power of two) are padding, traced like any other lane
-and summed nowhere. A launch small enough for the third rule gets ``2·c`` equal blocks of whole
-pixels, a multiple of ``16 / gcd(spp, 16)`` each, every sample on its lane of the plain layout,
-and its padding at the end. The shift serves the sampler:
+shift: 46 of 16,384 at 42 samples, none at a power of two) are padding, which the integrator is
+asked for with its lanes inactive and which is summed nowhere. An image too small for the fourth
+rule is padded at its end to more than ``2·c`` blocks, so the blocks are always ``B`` lanes and
+every sample's lane is the same whatever the thread count. The shift serves the sampler:
 
 - seahaze's sampler draws by sample, not by lane, so a block's pixels start at the same place
   within a SIMD packet (of 4, 8 or 16 lanes) as in one thread's single block: drjit adds a
   packet's lanes of one pixel together before adding them to the sum, and the same grouping
-  gives the same bytes whatever the thread count;
+  gives the same bytes as Mitsuba's own order would;
 - Mitsuba's samplers draw by lane, and ``multijitter`` stratifies lanes ``k·spp … k·spp + spp −
   1`` together, so a block's pixels start on such a lane (``lane_groups``): its strata stay whole
-  pixels, and the bytes are the same from run to run at one thread count (the lanes, and so the
-  random numbers, move with the layout).
+  pixels. Its random numbers follow the lanes: those of Mitsuba's order where a block holds the
+  whole image or the sample count divides ``B``, others (as good) beyond.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 BLOCK_LANES = 16_384
 """drjit's LLVM block size (``jitc_llvm_block_size``): lanes per work item of a large launch."""
@@ -89,9 +89,12 @@ def sample_layout(
     each pixel on lanes ``k·spp … k·spp + spp − 1`` for a Mitsuba sampler, rather than at its
     plain layout's place within a SIMD packet for seahaze's.
 
-    One thread, whose single block any layout suits, gets two threads' layout, so that its
-    bytes are theirs. More samples per pixel than a block holds get the plain layout (no
-    layout avoids the straddles). Raises ``ValueError`` for counts below 1."""
+    Every sample's lane is the same whatever ``threads``: only the padding at the end grows,
+    to more than ``2·threads`` blocks of :data:`BLOCK_LANES` (drjit's fourth rule, the one
+    whose blocks the layout follows) when the image fills fewer and there is more than one
+    thread. More samples per pixel than a
+    block holds get the plain layout (no layout avoids the straddles). Raises ``ValueError``
+    for counts below 1."""
     if min(n_pixels, spp, threads) < 1:
         raise ValueError(
             f"pixels, samples per pixel and threads must be at least 1, not "
@@ -100,29 +103,9 @@ def sample_layout(
     blocked = _blocked_layout(n_pixels, spp, lane_groups)
     if blocked is None:
         return plain_layout(n_pixels, spp)
-    threads = max(threads, 2)
-    blocks = -(-n_pixels // blocked.pixels_per_block)
-    if blocks > 2 * threads:
-        return blocked  # drjit's fourth rule, blocks of B lanes
-    # drjit's third rule: 2·c equal blocks of whole packets. With a multiple of
-    # 16/gcd(spp, 16) pixels each, a block's lanes are a multiple of 16 and its pixels need
-    # no shift: every sample keeps its lane of the plain layout.
-    align = WIDEST_PACKET_LANES // math.gcd(spp, WIDEST_PACKET_LANES)
-    per_block = _round_up(-(-n_pixels // (2 * threads)), align)
-    if per_block * spp <= BLOCK_LANES:
-        return SampleLayout(
-            n_pixels, spp, per_block, per_block * spp, 2 * threads * per_block * spp
-        )
-    # Too few pixels of too many samples for that: padded to the fourth rule's 2·c + 1 blocks.
-    return SampleLayout(
-        n_pixels,
-        spp,
-        blocked.pixels_per_block,
-        BLOCK_LANES,
-        (2 * threads + 1) * BLOCK_LANES,
-        blocked.shift_step,
-        blocked.shift_modulus,
-    )
+    if threads == 1:
+        return blocked  # one block: no padding needed
+    return replace(blocked, lanes=max(blocked.lanes, 2 * threads * BLOCK_LANES + 1))
 
 
 def _blocked_layout(n_pixels: int, spp: int, lane_groups: bool) -> SampleLayout | None:
@@ -146,7 +129,3 @@ def _blocked_layout(n_pixels: int, spp: int, lane_groups: bool) -> SampleLayout 
             return SampleLayout(n_pixels, spp, pixels, BLOCK_LANES, lanes, step, modulus)
         pixels -= 1
     return None
-
-
-def _round_up(value: int, multiple: int) -> int:
-    return -(-value // multiple) * multiple

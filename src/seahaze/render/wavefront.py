@@ -14,10 +14,10 @@ shares one compiled kernel (the per-thread sums' length is the one size left in 
 The samples are summed into each pixel by drjit's scatter-add into per-thread copies of the
 image, as in Mitsuba's film, but laid out among the kernel's lanes so that no pixel's samples
 are split between two of the threads' blocks (:mod:`seahaze.render.sample_blocks`): on the CPU
-the same seed gives the same bytes from run to run, and with seahaze's sampler whatever the
-thread count. Where that layout keeps Mitsuba's (a sample count that divides drjit's blocks, or
-a small image) the samples are Mitsuba's own, and the images equal ``mi.render``'s to the
-rounding of each pixel's sum (its film orders the additions by its own rules;
+the same seed gives the same bytes from run to run and whatever the thread count. Where that
+layout keeps Mitsuba's (a sample count that divides drjit's blocks, or an image of one block)
+the samples are Mitsuba's own, and the images equal ``mi.render``'s to the rounding of each
+pixel's sum (its film orders the additions by its own rules;
 ``tests/test_wavefront.py``). On a GPU the adds are atomic and their order varies in the last
 bits (docs/limits.md, "Reproducibility").
 
@@ -79,7 +79,7 @@ def render_film(
     film_scale = mi.Point2f(dr.opaque(mi.Float, 1.0 / width), dr.opaque(mi.Float, 1.0 / height))
     on_film = (position + sampler.next_2d()) * film_scale
     ray = _pinhole_rays(sensor, on_film, film_scale, spp)
-    spectrum, _valid, aovs = integrator.sample(scene, sampler, ray, sensor.get_medium(), True)
+    spectrum, _valid, aovs = integrator.sample(scene, sampler, ray, sensor.get_medium(), summed)
     if len(aovs) != len(integrator.aov_names()):
         raise ValueError("render_film takes integrators whose sample() returns their AOVs only")
     # An RGB variant's rays carry weight 1: the radiance is the sample's value.
@@ -120,8 +120,8 @@ def _layout(n_pixels: int, spp: int, sampler: Any) -> SampleLayout:
 
 def _lane_samples(layout: SampleLayout) -> tuple[Any, Any, Any]:
     """Each lane's pixel and sample index under ``layout`` and whether it is summed (not
-    padding; a padding lane traces pixel 0's ray). The layout's numbers are opaque: every
-    layout shares the kernel."""
+    padding: a padding lane is pixel 0's, and the integrator is asked for it inactive). The
+    layout's numbers are opaque: every layout shares the kernel."""
     import drjit as dr
     import mitsuba as mi
 
