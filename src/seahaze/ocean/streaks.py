@@ -17,15 +17,21 @@ The pattern (world frame, metres; ``u`` along the wind, ``v`` across it)
     Across the wind the sea is cut into cells of :data:`SPACING_M`; each cell ``k`` may hold one
     line, jittered within it, of its own width (:data:`WIDTH_M` times 0.5–1.5), with a
     Gaussian cross-profile ``exp(−((v − c_k)/w_k)²)``. The lines meander: ``v`` is shifted by
-    :data:`MEANDER_M` times 1-D value noise in ``u`` over :data:`MEANDER_LENGTH_M`. Along the
-    wind each line is broken into streaks: it is present where its own 1-D value noise over
-    :data:`SEGMENT_LENGTH_M` is positive (half its length, by the noise's symmetry), faded in
-    and out over :data:`SEGMENT_FADE` of the noise's range. Each line has its own foam density
-    (:data:`BRIGHTNESS`), and floating foam is flecked and holed, not a smooth band: the streak
-    is multiplied by ``(1 + n)/2``, ``n`` 2-D value noise stretched along the wind
-    (:data:`LACE_M`). A share of the lines, drawn per line from the seed, is present at all:
-    :func:`line_share`, which sets the coverage. The noise is the lattice hash of
-    :mod:`seahaze.haze_field` (the same everywhere, in any order).
+    :data:`MEANDER_M` times 1-D value noise in ``u`` over :data:`MEANDER_LENGTH_M`, and its
+    edges are ragged: ``v`` wanders by :data:`EDGE_WANDER_M` more, 2-D noise over a few metres.
+    Along the wind each line is broken into streaks: it is present where its own 1-D value
+    noise over :data:`SEGMENT_LENGTH_M` is positive (half its length, by the noise's symmetry),
+    faded in and out over :data:`SEGMENT_FADE` of the noise's range, at a ``u`` that wanders by
+    :data:`END_WANDER_M` across the line's width, so a streak frays out. Each line has its own
+    foam density (:data:`BRIGHTNESS`), and floating foam is fibrous, flecked and holed, not a
+    smooth band: the streak is multiplied by ``(1 + clip(g·n, −1, 1))/2``, ``n`` the sum of two
+    octaves of 2-D value noise stretched along the wind (:data:`LACE_M`,
+    :data:`FINE_LACE_M`), ``g`` :data:`LACE_CONTRAST`, read at a ``v`` of its own that wanders
+    by :data:`FIBRE_WANDER_M`: the fibres converge, part and cross the streak. A share of the
+    lines, drawn per line from the seed, is present at all: :func:`line_share`, which sets the
+    coverage. The noise is the lattice hash of :mod:`seahaze.haze_field` (the same everywhere,
+    in any order); the wanders take their own seeds, so each leaves the noise it moves
+    symmetric about 0 and the means below hold.
 
 Coverage
     The streaks' mean coverage is ``C = line_share · ½ · √π·w̄/S · 0.7 · ½`` (``w̄`` the mean
@@ -74,11 +80,34 @@ WIDTH_M = 1.2
 MAX_LINE_SHARE = 0.6
 """The largest share of the cells that hold a line: so many missing keep the lines' spacing
 irregular (1 to several cells) at the strongest winds."""
-LACE_M = (12.0, 0.35)
+LACE_M = (8.0, 0.35)
 """Lattice steps (m) along and across the wind of the noise that breaks a streak into the
 fibres and gaps of floating foam: long along the wind, so that the flecks read as threads
-drawn out by it (at 2.5 m along, seen along the wind from a bridge, they stacked into the
-rungs of a ladder)."""
+drawn out by it (at 2.5 m along and as wide as a line, seen along the wind from a bridge, they
+stacked into the rungs of a ladder)."""
+FINE_LACE_M = (2.0, 0.15)
+"""Lattice steps (m) of the lace's finer octave: flecks narrower than a fibre, too narrow
+across the wind to line up into rungs."""
+FINE_LACE_SHARE = 0.4
+"""Weight of the finer octave in the lace (the coarser one has the rest)."""
+LACE_CONTRAST = 1.6
+"""Gain on the lace before it is clipped to [−1, 1]: foam threads on dark water, not grey
+bands (two octaves summed vary less than one)."""
+FIBRE_WANDER_M = 0.6
+"""How far the lace's fibres wander across the wind (m), each stretch on its own: they
+converge, part and cross their streak instead of running beside one another the length of
+it (drawn along the line's own meander, they read as pairs of rails)."""
+FIBRE_WANDER_SCALE_M = (6.0, 1.5)
+"""Lattice steps (m) along and across the wind of the fibres' wander."""
+EDGE_WANDER_M = 0.3
+"""How far a streak's edge wanders across the wind (m): ragged, not a smooth Gaussian band."""
+EDGE_WANDER_SCALE_M = (4.0, 1.0)
+"""Lattice steps (m) along and across the wind of the edges' wander."""
+END_WANDER_M = 3.0
+"""How far a streak's end wanders along the wind across its width (m): it frays out instead
+of stopping on a straight line across the wind."""
+END_WANDER_SCALE_M = (5.0, 0.8)
+"""Lattice steps (m) along and across the wind of the ends' wander."""
 BRIGHTNESS = (0.4, 0.6)
 """A line's foam density: ``a + b·h`` for its hashed ``h`` in [0, 1) (mean 0.7)."""
 MEANDER_M = 1.5
@@ -160,9 +189,16 @@ class FoamStreaks:
         az = math.radians(self.toward_deg)
         x, y = np.asarray(x, np.float64), np.asarray(y, np.float64)
         u = x * math.cos(az) + y * math.sin(az) - self.drift_m
-        v = -x * math.sin(az) + y * math.cos(az)
+        across = -x * math.sin(az) + y * math.cos(az)
         seed = self.noise_seed
-        v = v + MEANDER_M * noise_1d(u / MEANDER_LENGTH_M, np.zeros_like(u), seed)
+        z = np.zeros_like(u)
+
+        def wander(scale: tuple[float, float], salt: int) -> np.ndarray:
+            return value_noise(u / scale[0], across / scale[1], z, seed + salt)
+
+        v = across + MEANDER_M * noise_1d(u / MEANDER_LENGTH_M, z, seed)
+        v = v + EDGE_WANDER_M * wander(EDGE_WANDER_SCALE_M, 4)
+        u_ends = u + END_WANDER_M * wander(END_WANDER_SCALE_M, 6)
         share = line_share(self.wind_speed)
         cell = np.floor(v / SPACING_M)
         lines = _LineHashes(cell, seed)
@@ -172,13 +208,16 @@ class FoamStreaks:
             centre = (k + 0.5 + JITTER * (lines.of(k, 1) - 0.5)) * SPACING_M
             width = WIDTH_M * (0.5 + lines.of(k, 2))
             profile = np.exp(-(((v - centre) / width) ** 2))
-            segment = noise_1d(u / SEGMENT_LENGTH_M, k, seed + 1)
+            segment = noise_1d(u_ends / SEGMENT_LENGTH_M, k, seed + 1)
             along = np.clip(segment / SEGMENT_FADE + 0.5, 0.0, 1.0)
             present = lines.of(k, 3) < share
             density = BRIGHTNESS[0] + BRIGHTNESS[1] * lines.of(k, 4)
             total = np.maximum(total, np.where(present, density * profile * along, 0.0))
-        lace = value_noise(u / LACE_M[0], v / LACE_M[1], np.zeros_like(u), seed + 2)
-        return total * 0.5 * (1.0 + lace)
+        fibre_v = across + FIBRE_WANDER_M * wander(FIBRE_WANDER_SCALE_M, 3)
+        coarse = value_noise(u / LACE_M[0], fibre_v / LACE_M[1], z, seed + 2)
+        fine = value_noise(u / FINE_LACE_M[0], fibre_v / FINE_LACE_M[1], z, seed + 5)
+        lace = (1.0 - FINE_LACE_SHARE) * coarse + FINE_LACE_SHARE * fine
+        return total * 0.5 * (1.0 + np.clip(LACE_CONTRAST * lace, -1.0, 1.0))
 
 
 class _LineHashes:

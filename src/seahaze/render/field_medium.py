@@ -92,6 +92,26 @@ def value_noise(q: tuple[Any, Any, Any], seed: Any) -> Any:
     return out
 
 
+def planar_value_noise(qx: Any, qy: Any, seed: Any) -> Any:
+    """:func:`value_noise` on the lattice plane ``z = 0`` (the streaks' 2-D noise): the four
+    corners that weigh anything, as :func:`seahaze.haze_field.value_noise` takes them there,
+    half the hashing of the eight."""
+    float_type = type(qx)
+    base = [dr.floor(qx), dr.floor(qy)]
+    fade = [_fade(qx - base[0]), _fade(qy - base[1])]
+    cells = [mi.Int64(b) for b in base]
+    zero = mi.Int64(0)
+    out = float_type(0.0)
+    for corner in range(4):
+        offsets = [(corner >> axis) & 1 for axis in range(2)]
+        weight = float_type(1.0)
+        for f, o in zip(fade, offsets, strict=True):
+            weight = weight * (f if o else 1.0 - f)
+        ix, iy = (c + o for c, o in zip(cells, offsets, strict=True))
+        out = dr.fma(weight, lattice_value(ix, iy, zero, seed, float_type), out)
+    return out
+
+
 def fractal_noise(q: tuple[Any, Any, Any], seed: Any) -> Any:
     """:func:`seahaze.haze_field.fractal_noise` in the kernel, in ``[−1, 1]``."""
     total, weight_sum = type(q[0])(0.0), 0.0

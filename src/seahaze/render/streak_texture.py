@@ -24,7 +24,16 @@ import mitsuba as mi
 
 from ..ocean.streaks import (
     BRIGHTNESS,
+    EDGE_WANDER_M,
+    EDGE_WANDER_SCALE_M,
+    END_WANDER_M,
+    END_WANDER_SCALE_M,
+    FIBRE_WANDER_M,
+    FIBRE_WANDER_SCALE_M,
+    FINE_LACE_M,
+    FINE_LACE_SHARE,
     JITTER,
+    LACE_CONTRAST,
     LACE_M,
     MEANDER_LENGTH_M,
     MEANDER_M,
@@ -35,7 +44,7 @@ from ..ocean.streaks import (
     FoamStreaks,
     line_share,
 )
-from .field_medium import lattice_value, value_noise
+from .field_medium import lattice_value, planar_value_noise
 
 PLUGIN = "seahaze_foam_streaks"
 """Mitsuba plugin name of the streak texture."""
@@ -61,8 +70,16 @@ def streak_fraction(streaks: Any, x: Any, y: Any) -> Any:
     texture's kernel parameters ``streaks`` (``cos``, ``sin`` of the direction, ``drift``,
     ``share``, ``seed``)."""
     u = x * streaks.cos + y * streaks.sin - streaks.drift
-    v = y * streaks.cos - x * streaks.sin
-    v = v + MEANDER_M * _noise_1d(u * (1.0 / MEANDER_LENGTH_M), mi.Float(0.0), streaks.seed)
+    across = y * streaks.cos - x * streaks.sin
+
+    def wander(scale: tuple[float, float], salt: int) -> Any:
+        return planar_value_noise(
+            u * (1.0 / scale[0]), across * (1.0 / scale[1]), streaks.seed + salt
+        )
+
+    v = across + MEANDER_M * _noise_1d(u * (1.0 / MEANDER_LENGTH_M), mi.Float(0.0), streaks.seed)
+    v = v + EDGE_WANDER_M * wander(EDGE_WANDER_SCALE_M, 4)
+    u_ends = u + END_WANDER_M * wander(END_WANDER_SCALE_M, 6)
     cell = dr.floor(v * (1.0 / SPACING_M))
     total = mi.Float(0.0)
     for offset in (-1.0, 0.0, 1.0):
@@ -71,15 +88,20 @@ def streak_fraction(streaks: Any, x: Any, y: Any) -> Any:
         width = WIDTH_M * (0.5 + _hash_01(k, 2, streaks.seed))
         offset_v = (v - centre) / width
         profile = dr.exp(-(offset_v * offset_v))
-        segment = _noise_1d(u * (1.0 / SEGMENT_LENGTH_M), k, streaks.seed + 1)
+        segment = _noise_1d(u_ends * (1.0 / SEGMENT_LENGTH_M), k, streaks.seed + 1)
         along = dr.clip(segment * (1.0 / SEGMENT_FADE) + 0.5, 0.0, 1.0)
         present = _hash_01(k, 3, streaks.seed) < streaks.share
         density = BRIGHTNESS[0] + BRIGHTNESS[1] * _hash_01(k, 4, streaks.seed)
         total = dr.maximum(total, dr.select(present, density * profile * along, 0.0))
-    lace = value_noise(
-        (u * (1.0 / LACE_M[0]), v * (1.0 / LACE_M[1]), mi.Float(0.0)), streaks.seed + 2
+    fibre_v = across + FIBRE_WANDER_M * wander(FIBRE_WANDER_SCALE_M, 3)
+    coarse = planar_value_noise(
+        u * (1.0 / LACE_M[0]), fibre_v * (1.0 / LACE_M[1]), streaks.seed + 2
     )
-    return total * 0.5 * (1.0 + lace)
+    fine = planar_value_noise(
+        u * (1.0 / FINE_LACE_M[0]), fibre_v * (1.0 / FINE_LACE_M[1]), streaks.seed + 5
+    )
+    lace = (1.0 - FINE_LACE_SHARE) * coarse + FINE_LACE_SHARE * fine
+    return total * 0.5 * (1.0 + dr.clip(LACE_CONTRAST * lace, -1.0, 1.0))
 
 
 def _hash_01(k: Any, channel: int, seed: Any) -> Any:
