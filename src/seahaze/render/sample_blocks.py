@@ -92,9 +92,8 @@ def sample_layout(
     Every sample's lane is the same whatever ``threads``: only the padding at the end grows,
     to more than ``2·threads`` blocks of :data:`BLOCK_LANES` (drjit's fourth rule, the one
     whose blocks the layout follows) when the image fills fewer and there is more than one
-    thread. More samples per pixel than a
-    block holds get the plain layout (no layout avoids the straddles). Raises ``ValueError``
-    for counts below 1."""
+    thread. More samples per pixel than a block holds get the plain layout (no layout avoids
+    the straddles). Raises ``ValueError`` for counts below 1."""
     if min(n_pixels, spp, threads) < 1:
         raise ValueError(
             f"pixels, samples per pixel and threads must be at least 1, not "
@@ -126,6 +125,6 @@ def _blocked_layout(n_pixels: int, spp: int, lane_groups: bool) -> SampleLayout 
             last = n_pixels - (blocks - 1) * pixels
             layout = SampleLayout(n_pixels, spp, pixels, BLOCK_LANES, 0, step, modulus)
             lanes = (blocks - 1) * BLOCK_LANES + layout.shift(blocks - 1) + last * spp
-            return SampleLayout(n_pixels, spp, pixels, BLOCK_LANES, lanes, step, modulus)
+            return replace(layout, lanes=lanes)
         pixels -= 1
     return None
