@@ -77,38 +77,32 @@ def lattice_value(ix: Any, iy: Any, iz: Any, seed: Any, float_type: Any) -> Any:
 def value_noise(q: tuple[Any, Any, Any], seed: Any) -> Any:
     """:func:`seahaze.haze_field.value_noise` in the kernel: the lattice values at the eight
     corners of ``q``'s cell blended with the quintic fade (in ``q``'s float type)."""
-    float_type = type(q[0])
-    base = [dr.floor(c) for c in q]
-    fade = [_fade(c - b) for c, b in zip(q, base, strict=True)]
-    cells = [mi.Int64(b) for b in base]
-    out = float_type(0.0)
-    for corner in range(8):
-        offsets = [(corner >> axis) & 1 for axis in range(3)]
-        weight = float_type(1.0)
-        for f, o in zip(fade, offsets, strict=True):
-            weight = weight * (f if o else 1.0 - f)
-        ix, iy, iz = (c + o for c, o in zip(cells, offsets, strict=True))
-        out = dr.fma(weight, lattice_value(ix, iy, iz, seed, float_type), out)
-    return out
+    return _blend_corners(q, seed)
 
 
 def planar_value_noise(qx: Any, qy: Any, seed: Any) -> Any:
     """:func:`value_noise` on the lattice plane ``z = 0`` (the streaks' 2-D noise): the four
     corners that weigh anything, as :func:`seahaze.haze_field.value_noise` takes them there,
     half the hashing of the eight."""
-    float_type = type(qx)
-    base = [dr.floor(qx), dr.floor(qy)]
-    fade = [_fade(qx - base[0]), _fade(qy - base[1])]
+    return _blend_corners((qx, qy), seed)
+
+
+def _blend_corners(q: tuple[Any, ...], seed: Any) -> Any:
+    """The lattice values at the corners of ``q``'s cell (2 or 3 axes; a missing ``z`` is the
+    lattice plane 0) blended with the quintic fade, in ``q``'s float type."""
+    float_type = type(q[0])
+    base = [dr.floor(c) for c in q]
+    fade = [_fade(c - b) for c, b in zip(q, base, strict=True)]
     cells = [mi.Int64(b) for b in base]
-    zero = mi.Int64(0)
     out = float_type(0.0)
-    for corner in range(4):
-        offsets = [(corner >> axis) & 1 for axis in range(2)]
+    for corner in range(1 << len(q)):
+        offsets = [(corner >> axis) & 1 for axis in range(len(q))]
         weight = float_type(1.0)
         for f, o in zip(fade, offsets, strict=True):
             weight = weight * (f if o else 1.0 - f)
-        ix, iy = (c + o for c, o in zip(cells, offsets, strict=True))
-        out = dr.fma(weight, lattice_value(ix, iy, zero, seed, float_type), out)
+        index = [c + o for c, o in zip(cells, offsets, strict=True)]
+        index += [mi.Int64(0)] * (3 - len(index))
+        out = dr.fma(weight, lattice_value(*index, seed, float_type), out)
     return out
 
 
