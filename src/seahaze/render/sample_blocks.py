@@ -17,27 +17,22 @@ added in another order than one thread's running sum: its value changes in the l
 to run. At 42 samples per pixel 16,384 lanes end inside a pixel 23 times in a 128×72 image; at a
 power of two, never.
 
-:func:`sample_layout` lays the samples out so that every block holds whole pixels, the lanes
-left over at a block's end (fewer than a pixel's samples plus, for Mitsuba's samplers, their
-alignment: 4 of 16,384 at 42 samples for seahaze's, none at a power of two) being padding that
-the integrator is asked for with its lanes inactive and that is summed nowhere. An image too
-small for the fourth rule is padded at its end to more than ``2·c`` blocks, so the blocks are
-always ``B`` lanes and every sample's lane is the same whatever the thread count. Within a
-block the order serves the sampler:
+:func:`sample_layout` lays the samples out so that every block holds whole pixels. Each block of
+``B`` lanes takes as many whole pixels as fit, shifted from its start by a few lanes (its
+:meth:`SampleLayout.shift`); the lanes left over (fewer than a pixel's samples plus the largest
+shift: 46 of 16,384 at 42 samples, none at a power of two) are padding, which the integrator is
+asked for with its lanes inactive and which is summed nowhere. An image too small for the fourth
+rule is padded at its end to more than ``2·c`` blocks, so the blocks are always ``B`` lanes and
+every sample's lane is the same whatever the thread count. The shift serves the sampler:
 
-- seahaze's sampler draws by sample, not by lane, so a block is laid out sample by sample
-  (``sample_major``: lane ``s·P + i`` for sample ``s`` of the block's pixel ``i``, ``P`` pixels
-  to a block). A SIMD packet (of 4, 8 or 16 lanes) then holds at most one sample of a pixel
-  (while ``P`` ≥ 16, i.e. up to 1,024 samples per pixel), and every pixel's sum is its samples
-  added one after another in their order: the same bytes whatever the thread count and the
-  packet width (drjit adds a packet's lanes of one pixel together before adding them to the
-  sum, in a grouping that follows the width);
+- seahaze's sampler draws by sample, not by lane, so a block's pixels start at the same place
+  within a SIMD packet (of 4, 8 or 16 lanes) as in one thread's single block: drjit adds a
+  packet's lanes of one pixel together before adding them to the sum, and the same grouping
+  gives the same bytes as Mitsuba's own order would;
 - Mitsuba's samplers draw by lane, and ``multijitter`` stratifies lanes ``k·spp … k·spp + spp −
-  1`` together, so their blocks keep a pixel's samples on such neighbouring lanes, shifted from
-  the block's start to a multiple of ``spp`` (:meth:`SampleLayout.shift`): the strata stay
-  whole pixels. The random numbers follow the lanes: Mitsuba's order's where a block holds the
-  whole image or the sample count divides ``B``, others (as good) beyond; the sums' bytes
-  follow the packet width.
+  1`` together, so a block's pixels start on such a lane (``lane_groups``): its strata stay whole
+  pixels. Its random numbers follow the lanes: those of Mitsuba's order where a block holds the
+  whole image or the sample count divides ``B``, others (as good) beyond.
 """
 
 from __future__ import annotations
@@ -55,10 +50,9 @@ WIDEST_PACKET_LANES = 16
 @dataclass(frozen=True)
 class SampleLayout:
     """Lanes in blocks of ``block_lanes``; block ``b`` holds the samples of pixels
-    ``b·pixels_per_block …``, either sample by sample (:attr:`sample_major`) or pixel by pixel
-    (``spp`` neighbouring lanes each) from lane :meth:`shift` of the block on; the rest of a
-    block, and every lane of pixel index ``n_pixels`` or above, is padding. ``lanes`` is the
-    kernel's size.
+    ``b·pixels_per_block …`` (``spp`` neighbouring lanes each) from lane :meth:`shift` of the
+    block on; the rest of a block, and every lane of pixel index ``n_pixels`` or above, is
+    padding. ``lanes`` is the kernel's size.
 
     One block of every pixel is the plain layout (:func:`plain_layout`): a pixel's ``s``-th
     sample at lane ``pixel·spp + s``, Mitsuba's own order."""
@@ -70,10 +64,7 @@ class SampleLayout:
     lanes: int
     shift_step: int = 0
     """A block's shift grows by this many lanes per block, modulo :attr:`shift_modulus`."""
-    shift_modulus: int = 1
-    sample_major: bool = False
-    """Block ``b``'s lane ``s·pixels_per_block + i`` is sample ``s`` of its pixel ``i`` (no
-    shift), instead of lane ``shift(b) + i·spp + s``."""
+    shift_modulus: int = WIDEST_PACKET_LANES
 
     def shift(self, block: int) -> int:
         """Lanes between the start of ``block`` and its first pixel's first sample."""
@@ -117,26 +108,23 @@ def sample_layout(
 
 
 def _blocked_layout(n_pixels: int, spp: int, lane_groups: bool) -> SampleLayout | None:
-    """Blocks of :data:`BLOCK_LANES` lanes, each with the most whole pixels that fit (beside
-    the largest shift a block takes, for ``lane_groups``), the launch ending at its last
-    sample; None when not even one pixel fits."""
+    """Blocks of :data:`BLOCK_LANES` lanes, each with the most whole pixels that fit beside
+    the largest shift a block takes, the last one ending at its last sample; None when not
+    even one pixel fits."""
     pixels = BLOCK_LANES // spp
-    if pixels == 0:
-        return None
-    if not lane_groups:
-        blocks = -(-n_pixels // pixels)
-        last = n_pixels - (blocks - 1) * pixels
-        # The last block's last sample row ends at its last pixel.
-        lanes = (blocks - 1) * BLOCK_LANES + (spp - 1) * pixels + last
-        return SampleLayout(n_pixels, spp, pixels, BLOCK_LANES, lanes, sample_major=True)
-    # Block b starts at lane b·B: shifted by (−b·B) mod spp, its pixels start on k·spp.
-    step = -BLOCK_LANES % spp
-    largest_shift = spp - math.gcd(step, spp)
-    pixels = (BLOCK_LANES - largest_shift) // spp
-    if pixels == 0:
-        return None
-    blocks = -(-n_pixels // pixels)
-    last = n_pixels - (blocks - 1) * pixels
-    layout = SampleLayout(n_pixels, spp, pixels, BLOCK_LANES, 0, step, spp)
-    lanes = (blocks - 1) * BLOCK_LANES + layout.shift(blocks - 1) + last * spp
-    return replace(layout, lanes=lanes)
+    while pixels > 0:
+        if lane_groups:
+            # Block b starts at lane b·B: shifted by (−b·B) mod spp, its pixels start on k·spp.
+            step, modulus = -BLOCK_LANES % spp, spp
+        else:
+            # The plain layout puts block b's first pixel at lane b·pixels·spp.
+            step, modulus = pixels * spp % WIDEST_PACKET_LANES, WIDEST_PACKET_LANES
+        largest_shift = modulus - math.gcd(step, modulus)
+        if pixels * spp + largest_shift <= BLOCK_LANES:
+            blocks = -(-n_pixels // pixels)
+            last = n_pixels - (blocks - 1) * pixels
+            layout = SampleLayout(n_pixels, spp, pixels, BLOCK_LANES, 0, step, modulus)
+            lanes = (blocks - 1) * BLOCK_LANES + layout.shift(blocks - 1) + last * spp
+            return replace(layout, lanes=lanes)
+        pixels -= 1
+    return None

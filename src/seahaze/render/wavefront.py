@@ -14,8 +14,7 @@ shares one compiled kernel (the per-thread sums' length is the one size left in 
 The samples are summed into each pixel by drjit's scatter-add into per-thread copies of the
 image, as in Mitsuba's film, but laid out among the kernel's lanes so that no pixel's samples
 are split between two of the threads' blocks (:mod:`seahaze.render.sample_blocks`): on the CPU
-the same seed gives the same bytes from run to run and whatever the thread count (and, with
-seahaze's sampler, the SIMD packet width). Where that
+the same seed gives the same bytes from run to run and whatever the thread count. Where that
 layout keeps Mitsuba's (a sample count that divides drjit's blocks, or an image of one block)
 the samples are Mitsuba's own, and the images equal ``mi.render``'s to the rounding of each
 pixel's sum (its film orders the additions by its own rules;
@@ -122,30 +121,23 @@ def _layout(n_pixels: int, spp: int, sampler: Any) -> SampleLayout:
 def _lane_samples(layout: SampleLayout) -> tuple[Any, Any, Any]:
     """Each lane's pixel and sample index under ``layout`` and whether it is summed (not
     padding: a padding lane is pixel 0's, and the integrator is asked for it inactive). The
-    layout's numbers are opaque: every layout of one order shares the kernel."""
+    layout's numbers are opaque: every layout shares the kernel."""
     import drjit as dr
     import mitsuba as mi
 
     spp = dr.opaque(mi.UInt32, layout.spp)
     block_lanes = dr.opaque(mi.UInt32, layout.block_lanes)
-    per_block = dr.opaque(mi.UInt32, layout.pixels_per_block)
     samples_per_block = dr.opaque(mi.UInt32, layout.pixels_per_block * layout.spp)
     lane = dr.arange(mi.UInt32, layout.lanes)
     block = lane // block_lanes
-    if layout.sample_major:
-        offset = lane - block * block_lanes
-        sample = offset // per_block
-        within = offset - sample * per_block
-    else:
-        # SampleLayout.shift in the kernel; lanes before it wrap to large offsets (padding).
-        step = dr.opaque(mi.UInt32, layout.shift_step)
-        shift = block * step % dr.opaque(mi.UInt32, layout.shift_modulus)
-        offset = lane - block * block_lanes - shift
-        within = offset // spp
-        sample = offset - within * spp
-    pixel = block * per_block + within
+    # SampleLayout.shift in the kernel; lanes before it wrap to large offsets (padding).
+    shift = (
+        block * dr.opaque(mi.UInt32, layout.shift_step) % dr.opaque(mi.UInt32, layout.shift_modulus)
+    )
+    offset = lane - block * block_lanes - shift
+    pixel = block * dr.opaque(mi.UInt32, layout.pixels_per_block) + offset // spp
     summed = (offset < samples_per_block) & (pixel < dr.opaque(mi.UInt32, layout.n_pixels))
-    return dr.select(summed, pixel, 0), sample, summed
+    return dr.select(summed, pixel, 0), offset % spp, summed
 
 
 SMALLEST_SUM_CAPACITY = 1 << 16
