@@ -293,6 +293,7 @@ def test_reference_batch_is_complete_and_logged(reference):
     assert events[-1]["outcome"] == "complete" and events[-1]["images"] == 2 * COUNT
 
 
+@pytest.mark.slow
 def test_sigkill_mid_batch_then_resume_gives_identical_files(template, reference, tmp_path, capsys):
     out = tmp_path / "killed"
     command = [sys.executable, "-m", "seahaze.cli", "render", str(template)]
@@ -452,6 +453,7 @@ def test_a_full_disk_stops_cleanly_and_keeps_finished_scenes(
     _assert_same_tree(out, reference)
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_gives_the_local_result(template, reference, tmp_path):
     distributed = pytest.importorskip("distributed")
     out = tmp_path / "dask"
@@ -483,6 +485,7 @@ def _check_labels(text: str) -> None:
         assert len(box) == 4 and all(0.0 <= float(v) <= 1.0 for v in box), line
 
 
+@pytest.mark.slow
 def test_ci_dataset_regenerates_and_validates(tmp_path):
     template = CI_SCENE
     out = tmp_path / "ci"

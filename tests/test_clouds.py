@@ -183,6 +183,7 @@ def test_a_hidden_sun_is_dark_and_an_out_sun_is_the_clear_days(mitsuba_variant):
     assert max(sky_emitters(outcomes[0])["sun"]["irradiance"]["value"]) == 0.0
 
 
+@pytest.mark.slow
 def test_a_broken_cloud_scene_renders_clouds_and_blue_sky(mitsuba_variant):
     from seahaze.render.engine import open_session
     from seahaze.spec import with_overrides

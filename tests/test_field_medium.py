@@ -85,6 +85,7 @@ def test_the_majorant_bounds_the_density_closely(name: str) -> None:
     assert density.max() > 0.5 * peak
 
 
+@pytest.mark.slow
 def test_volpath_through_the_field_gives_each_pixel_its_transmittance() -> None:
     # The sky through patchy haze with nothing scattering (albedo 0): a pixel's level over
     # its clean value is the transmittance of its rays through the field (the sky is an
@@ -149,6 +150,7 @@ def _pixel_transmittance(camera: Camera, medium, sigma: float, sub: int) -> np.n
     return out / sub**2
 
 
+@pytest.mark.slow
 def test_a_uniform_field_scatters_as_the_homogeneous_medium() -> None:
     # Patches of density ratio 1 modulate by exp(0) = 1: the same haze as the plain slab, but
     # rendered through FieldMedium. Sky and sea means agree within their noise;

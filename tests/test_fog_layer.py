@@ -103,6 +103,7 @@ def test_the_scene_yaml_takes_a_fog_layer_and_refuses_one_past_the_haze_top() ->
 @pytest.mark.parametrize(
     ("camera_m", "visibility"), [(12.0, 1000.0), (120.0, 3000.0)], ids=["in-fog", "above-fog"]
 )
+@pytest.mark.slow
 def test_physical_renders_the_fog_layer_as_volpath_does(mitsuba_variant, camera_m, visibility):
     """Sky and sea through a fog up to 60 m with a tenth of its density above, the camera in
     the fog or on a mast above it: `physical` (the layer as a slab in reduced height) against

@@ -190,6 +190,7 @@ def test_ctrl_c_stops_a_long_pass_at_once(scene, tmp_path):
     assert not (out / LOCK_NAME).exists() and _statuses(out) == {"long": "pending"}
 
 
+@pytest.mark.slow
 def test_a_folder_interrupted_in_its_pass_resumes_to_the_uninterrupted_files(
     small_scene, tmp_path, mitsuba_variant
 ):
@@ -205,6 +206,7 @@ def test_a_folder_interrupted_in_its_pass_resumes_to_the_uninterrupted_files(
     _assert_same_dataset(out, reference, mitsuba_variant)
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_local_workers_and_the_folder_resumes(small_scene, tmp_path, mitsuba_variant):
     out, log = tmp_path / "ds", tmp_path / "log.jsonl"
     command = _command(small_scene, out, "--scenes", "2", "--workers", "2", "--log", str(log))

@@ -207,6 +207,7 @@ def test_reduced_height_and_distance_agree_with_the_reduced_length() -> None:
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("visibility", [500.0, 2000.0])
 def test_a_new_medium_renders_in_physical_as_in_reference(mitsuba_variant, visibility) -> None:
     """Sky and sea of a small scene with a vessel through fog below 120 m and a quarter of its

@@ -153,6 +153,7 @@ def test_optical_depths_equal_a_finer_integration(profile, quadrature, request):
         assert got[k] == pytest.approx(want, rel=1e-4, abs=1e-6), k
 
 
+@pytest.mark.slow
 def test_a_patchy_bank_scene_renders_with_exact_maps(tmp_path):
     """scene → asm render: the transmission maps hold the quadrature's optical depths, and the
     hazy image is the atmospheric scattering model of its own transmittance."""
@@ -176,6 +177,7 @@ def test_a_patchy_bank_scene_renders_with_exact_maps(tmp_path):
         np.testing.assert_allclose(level.radiance[..., 1], want, rtol=2e-4, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_the_physical_mode_renders_haze_that_varies_across(tmp_path):
     """``physical`` renders each pixel's equivalent profile (render.pixel_density): from the
     command line it writes the dataset, and what the haze does to each pixel (hazy minus
@@ -249,6 +251,7 @@ render: {mode: asm, spp: 1, seed: 3}
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mode", ["asm", "physical"])
 def test_a_bank_rolling_in_darkens_the_view_frame_by_frame(tmp_path, mode):
     """A bank drifting toward the camera at 25 m/s (edge at 700, 600, 500 m at 0, 4, 8 s): the

@@ -159,7 +159,7 @@ def _batch_means(images: list[np.ndarray], scene: _Scene) -> tuple[np.ndarray, n
     return means.mean(axis=0), means.std(axis=0, ddof=1) / np.sqrt(len(images))
 
 
-@pytest.mark.parametrize("spectrum", ["grey", "kim"])
+@pytest.mark.parametrize("spectrum", ["grey", pytest.param("kim", marks=pytest.mark.slow)])
 def test_every_level_of_one_pass_equals_the_level_rendered_alone(
     scene: _Scene, spectrum: str
 ) -> None:

@@ -120,7 +120,8 @@ def scenes() -> _Scenes:
 
 
 @pytest.mark.parametrize(
-    ("visibility", "spectrum"), [(300.0, "grey"), (1000.0, "grey"), (2000.0, "kim")]
+    ("visibility", "spectrum"),
+    [pytest.param(300.0, "grey", marks=pytest.mark.slow), (1000.0, "grey"), (2000.0, "kim")],
 )
 def test_physical_matches_volpath_on_sky_and_sea(
     scenes: _Scenes, visibility: float, spectrum: str
@@ -186,6 +187,7 @@ def _box_toward_the_sun(mode: str, **estimator: float):
     return spec, load_flat_scene(spec, [box], (BOX_VISIBILITY,), mode == "reference", 0.3)[0]
 
 
+@pytest.mark.slow
 def test_haze_in_front_of_a_vessel_sees_the_vessel() -> None:
     # Forward scattering brings the camera the light of what lies just beyond each point of
     # haze, here the box, not the bright open sky the tables hold.

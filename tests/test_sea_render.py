@@ -443,7 +443,10 @@ def whitecap_fraction(wind: float, heading_deg: float) -> tuple[float, float, fl
 
 
 @pytest.mark.usefixtures("mitsuba_variant")
-@pytest.mark.parametrize("wind", [8.0, 12.0, 15.0])
+@pytest.mark.parametrize(
+    "wind",
+    [pytest.param(8.0, marks=pytest.mark.slow), 12.0, pytest.param(15.0, marks=pytest.mark.slow)],
+)
 def test_rendered_whitecap_fraction_follows_the_coverage_law(wind: float) -> None:
     """The whitecap fraction measured on rendered images — two opposite headings, about two
     periods of the foam field — is within a factor of 2 of W = 3.84e-6 U^3.41 (Monahan &

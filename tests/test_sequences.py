@@ -658,6 +658,7 @@ def test_mot_and_coco_track_files_match_the_frames(reference):
     assert tracks == [(frame, track) for frame, track, _ in expected]
 
 
+@pytest.mark.slow
 def test_sigkill_after_a_frame_then_resume_is_byte_identical(template, reference, tmp_path):
     out = tmp_path / "killed"
     command = [sys.executable, "-m", "seahaze.cli", "render", str(template)]

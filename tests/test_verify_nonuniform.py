@@ -63,6 +63,7 @@ def patchy_asm(tmp_path_factory, mitsuba_variant):
     return code, json.loads((out / "report.json").read_text()), text.getvalue()
 
 
+@pytest.mark.slow
 def test_asm_fit_recovers_each_level_exactly_against_the_reduced_length(patchy_asm):
     # asm composites I = J t + A (1 - t) with t = exp(-σ ℓ) per pixel: on a black target
     # J = 0 and on the horizon sky t ~ 0, so C = -t and the fit of σ against each target's own
@@ -78,6 +79,7 @@ def test_asm_fit_recovers_each_level_exactly_against_the_reduced_length(patchy_a
     assert report["config"]["medium"]["kind"] == "NonUniformHaze"
 
 
+@pytest.mark.slow
 def test_each_target_reads_its_own_rays_optical_depth(patchy_asm):
     # Independent: the base scene's medium (normalised over the scene's own 60° view, patches
     # seeded by its render.seed) integrated by Simpson along the measured pixels' rays. The
@@ -110,6 +112,7 @@ def test_each_target_reads_its_own_rays_optical_depth(patchy_asm):
         assert ratios.max() > 1.1 and ratios.min() < 0.9
 
 
+@pytest.mark.slow
 def test_dense_and_thin_targets_are_counted_and_printed(patchy_asm):
     _, report, text = patchy_asm
     for level in report["levels"]:
