@@ -43,6 +43,7 @@ def _clean(spec: SceneSpec, geometry) -> np.ndarray:
     return open_session(spec, geometry).render_clean()
 
 
+@pytest.mark.slow
 def test_clean_is_the_same_for_any_haze_in_every_mode(geometry):
     """Within a mode the clean image does not depend on the haze settings, to the byte. (The
     modes' clean images are different estimators of the same image: ``reference`` and ``asm``

@@ -163,6 +163,7 @@ render:
 """
 
 
+@pytest.mark.slow
 @pytest.mark.usefixtures("mitsuba_variant")
 def test_a_sequence_from_a_pitching_ship_is_blurred_in_its_pngs_only(tmp_path):
     images = {}

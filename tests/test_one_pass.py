@@ -159,7 +159,8 @@ def _batch_means(images: list[np.ndarray], scene: _Scene) -> tuple[np.ndarray, n
     return means.mean(axis=0), means.std(axis=0, ddof=1) / np.sqrt(len(images))
 
 
-@pytest.mark.parametrize("spectrum", ["grey", pytest.param("kim", marks=pytest.mark.slow)])
+@pytest.mark.slow
+@pytest.mark.parametrize("spectrum", ["grey", "kim"])
 def test_every_level_of_one_pass_equals_the_level_rendered_alone(
     scene: _Scene, spectrum: str
 ) -> None:
@@ -196,6 +197,7 @@ def test_the_clean_member_equals_mitsubas_clean_render(scene: _Scene) -> None:
     assert np.all(np.abs(a - b) <= allowed), (a, b, allowed)
 
 
+@pytest.mark.slow
 def test_hazy_noise_follows_the_clean_noise_near_the_camera() -> None:
     # The default scene's wavy sea, as the issue measured it: per-pixel errors against a
     # 256-spp render, on the sea within 200 m, at V = 4000 m (transmittance ~0.85-1 there).

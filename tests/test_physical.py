@@ -121,7 +121,11 @@ def scenes() -> _Scenes:
 
 @pytest.mark.parametrize(
     ("visibility", "spectrum"),
-    [pytest.param(300.0, "grey", marks=pytest.mark.slow), (1000.0, "grey"), (2000.0, "kim")],
+    [
+        pytest.param(300.0, "grey", marks=pytest.mark.slow),
+        (1000.0, "grey"),
+        pytest.param(2000.0, "kim", marks=pytest.mark.slow),
+    ],
 )
 def test_physical_matches_volpath_on_sky_and_sea(
     scenes: _Scenes, visibility: float, spectrum: str

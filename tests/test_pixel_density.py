@@ -123,6 +123,7 @@ def _renderer(medium, settings=None):
     return PhysicalRenderer(session.loaded, SPEC, settings, geometry=session.pixels)
 
 
+@pytest.mark.slow
 def test_a_field_twice_as_dense_everywhere_is_the_slab_at_twice_the_extinction():
     """With the slab's diffuse field at 2σ, every pass of the field at σ is the slab's at
     2σ: transmittances of every segment (camera, sea, vessels, rays toward the lights),

@@ -353,6 +353,7 @@ def test_glitter_measurement_recovers_a_known_roughness_on_a_flat_sea() -> None:
         assert measured == pytest.approx(ocean.mean_square_slope(wind), rel=0.03)
 
 
+@pytest.mark.slow
 @pytest.mark.usefixtures("mitsuba_variant")
 def test_sun_glitter_widens_with_the_wind_as_cox_and_munk_measured() -> None:
     """The glitter of the rendered sea (resolved waves + sub-grid BSDF) widens monotonically
@@ -443,10 +444,8 @@ def whitecap_fraction(wind: float, heading_deg: float) -> tuple[float, float, fl
 
 
 @pytest.mark.usefixtures("mitsuba_variant")
-@pytest.mark.parametrize(
-    "wind",
-    [pytest.param(8.0, marks=pytest.mark.slow), 12.0, pytest.param(15.0, marks=pytest.mark.slow)],
-)
+@pytest.mark.slow
+@pytest.mark.parametrize("wind", [8.0, 12.0, 15.0])
 def test_rendered_whitecap_fraction_follows_the_coverage_law(wind: float) -> None:
     """The whitecap fraction measured on rendered images — two opposite headings, about two
     periods of the foam field — is within a factor of 2 of W = 3.84e-6 U^3.41 (Monahan &

@@ -44,6 +44,7 @@ def _integrated_reduced_length(density, z0: float, dz: float, distance: float) -
     return value / abs(dz)
 
 
+@pytest.mark.slow
 def test_fog_layer_maps_equal_a_numerical_integration(fog_render):
     spec, scene = fog_render
     geo = scene.geometry
@@ -69,6 +70,7 @@ def test_fog_layer_maps_equal_a_numerical_integration(fog_render):
             assert maps.visibility_eff_m[p] == pytest.approx(v_eff, rel=1e-4)
 
 
+@pytest.mark.slow
 def test_in_the_fog_layer_the_view_sees_farther_upward(fog_render):
     """The camera sits above the fog: rays down into it see less than the level's
     visibility, rays up into the thinner haze more."""
