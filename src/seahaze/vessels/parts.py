@@ -104,6 +104,10 @@ class PartSet:
             raise ValueError(f"part {name!r} already uses material {known.name!r}")
         self._bodies.setdefault(name, []).append(mesh)
 
+    def material_of(self, name: str) -> Material:
+        """The material of part ``name`` (which must have been added)."""
+        return self._materials[name]
+
     def to_parts(self) -> list[VesselPart]:
         """One :class:`VesselPart` per name, its bodies concatenated without merging."""
         return [

@@ -1,0 +1,137 @@
+"""Guard rails along exposed deck edges: stanchions about 1.5 m apart carrying three courses up
+to 1 m above the deck, as the International Convention on Load Lines requires.
+
+ICLL 1966/1988, Annex I, Regulation 25 (Protection of the crew): guard rails or bulwarks round
+all exposed decks, at least 1 m high; on superstructure and freeboard decks at least three
+courses, the opening below the lowest not over 230 mm and the other courses not over 380 mm
+apart; stanchions about 1.5 m apart. Small craft codes ask the same heights (e.g. the UK MCA
+small vessel code, section 22.2: 1000 mm, 230 mm, 380 mm).
+
+The bars are a few centimetres thick (a 42 mm top rail, 27 mm courses, 50 mm stanchions):
+a third of a pixel at 200 m in a 1280×720 frame of 60°, so what a camera sees of them is a
+faint line over a deck edge that otherwise ends flat against the sky, as railings read in
+photographs of ships. All dimensions in metres, in the vessel frame (x forward, y port, z up).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+from numpy.typing import NDArray
+
+from seahaze.vessels.geometry import HullForm, boxes, concatenate
+
+__all__ = [
+    "COURSE_HEIGHTS_M",
+    "COURSE_SIZES_M",
+    "RAIL_INSET_M",
+    "STANCHION_SIZE_M",
+    "STANCHION_SPACING_M",
+    "deck_edge_path",
+    "guard_rail",
+    "roof_edge_path",
+]
+
+FloatArray = NDArray[np.float64]
+
+COURSE_HEIGHTS_M = (0.235, 0.615, 1.0)
+"""Centre heights of the three courses above the deck (m): the top rail at 1 m, the lowest
+leaving 0.22 m below it (≤ 0.23), the clear gaps between courses 0.355 and 0.351 m (≤ 0.38)."""
+COURSE_SIZES_M = (0.027, 0.027, 0.042)
+"""Thickness of each course's square bar (m): 1 in. pipe for the courses, 1 1/4 in. (42.4 mm)
+for the top rail."""
+STANCHION_SIZE_M = 0.05
+"""Thickness of a stanchion's square bar (m)."""
+STANCHION_SPACING_M = 1.5
+"""Greatest distance between neighbouring stanchions along the deck edge (m)."""
+RAIL_INSET_M = 0.15
+"""How far inside a roof's or deck's edge the builders stand a guard rail's stanchions (m)."""
+
+
+def guard_rail(path: FloatArray) -> trimesh.Trimesh:
+    """A guard rail along ``path``, (n, 3) points on the deck edge (x, y, deck height) in
+    order: a stanchion at each end and as many between as keep them at most
+    ``STANCHION_SPACING_M`` apart along the path, and the courses following the deck's
+    height. One mesh of closed bars (each watertight, none sharing a vertex)."""
+    path = np.asarray(path, np.float64)
+    if path.ndim != 2 or path.shape[1] != 3 or len(path) < 2:
+        raise ValueError(f"a guard rail needs (n >= 2, 3) points, got shape {path.shape}")
+    # Repeated points (a path closed on itself at the stem) would make bars of no direction.
+    keep = np.concatenate([[True], np.linalg.norm(np.diff(path, axis=0), axis=1) > 1e-6])
+    path = path[keep]
+    if len(path) < 2:
+        raise ValueError("a guard rail's path has no length")
+    bars = [_stanchions(path)]
+    for height, size in zip(COURSE_HEIGHTS_M, COURSE_SIZES_M, strict=True):
+        lifted = path + np.array([0.0, 0.0, height])
+        bars.append(_bars(lifted[:-1], lifted[1:], size))
+    return concatenate(bars)
+
+
+def roof_edge_path(
+    x_aft: float, x_fwd: float, half_width: float, z: float, *, closed: bool = False
+) -> FloatArray:
+    """The edge of a flat roof from ``x_aft`` to ``x_fwd`` (m) and ``half_width`` either side,
+    at height ``z``: up the port side from forward, across the aft end, down the starboard
+    side; the forward end left to what stands there (a wheelhouse), or ``closed`` across it
+    too (a wheelhouse top)."""
+    corners = [
+        [x_fwd, half_width, z],
+        [x_aft, half_width, z],
+        [x_aft, -half_width, z],
+        [x_fwd, -half_width, z],
+    ]
+    return np.array(corners + corners[:1] if closed else corners)
+
+
+def deck_edge_path(form: HullForm, x_aft: float, inset: float, step: float = 1.0) -> FloatArray:
+    """The hull's deck edge forward of ``x_aft`` (m), ``inset`` (m) inside the side: from the
+    port side at ``x_aft`` round the bow to the starboard side at ``x_aft``, at the deck's
+    height, a point every ``step`` metres or closer so the rail follows the sheer and the
+    bow's curve."""
+    x_bow = form.half_length - inset
+    count = max(2, int(np.ceil((x_bow - x_aft) / step)) + 1)
+    xs = np.linspace(x_aft, x_bow, count)
+    ys = np.maximum(form.deck_half_beam(xs) - inset, 0.0)
+    zs = form.deck_z(xs)
+    port = np.column_stack([xs, ys, zs])
+    starboard = np.column_stack([xs, -ys, zs])[::-1]
+    # The bow's two points meet near the stem; keep one of them if they coincide.
+    if np.allclose(port[-1], starboard[0]):
+        starboard = starboard[1:]
+    return np.vstack([port, starboard])
+
+
+def _stanchions(path: FloatArray) -> trimesh.Trimesh:
+    """Vertical bars from the deck to the top rail at both ends of ``path`` and evenly between,
+    at most ``STANCHION_SPACING_M`` apart along it."""
+    steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    count = int(np.ceil(arc[-1] / STANCHION_SPACING_M)) + 1
+    at = np.linspace(0.0, arc[-1], max(count, 2))
+    feet = np.column_stack([np.interp(at, arc, path[:, k]) for k in range(3)])
+    half = 0.5 * STANCHION_SIZE_M
+    lower = feet - np.array([half, half, 0.02])  # set 2 cm into the deck: no seam
+    upper = feet + np.array([half, half, COURSE_HEIGHTS_M[-1]])
+    return boxes(lower, upper)
+
+
+_UNIT_BOX = trimesh.creation.box(bounds=np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]))
+
+
+def _bars(starts: FloatArray, ends: FloatArray, size: float) -> trimesh.Trimesh:
+    """Square bars of side ``size`` from ``starts[i]`` to ``ends[i]`` ((n, 3), m), one face
+    level and one upright, each lengthened by half its side at both ends so that bars meeting
+    at a corner close it. The segments must not be vertical."""
+    along = ends - starts
+    length = np.linalg.norm(along, axis=1, keepdims=True)
+    tangent = along / length
+    side = np.cross([0.0, 0.0, 1.0], tangent)
+    side /= np.linalg.norm(side, axis=1, keepdims=True)
+    up = np.cross(tangent, side)  # (tangent, side, up) is right-handed, as the unit box's axes
+    origin = starts - 0.5 * size * (tangent + side + up)
+    corners = np.asarray(_UNIT_BOX.vertices)  # in [0, 1]^3
+    frame = np.stack([(length + size) * tangent, size * side, size * up], axis=1)  # (n, 3, 3)
+    vertices = origin[:, None, :] + np.einsum("ck,nkj->ncj", corners, frame)
+    faces = np.asarray(_UNIT_BOX.faces)[None] + np.arange(len(starts))[:, None, None] * 8
+    return trimesh.Trimesh(vertices.reshape(-1, 3), faces.reshape(-1, 3), process=False)
