@@ -31,7 +31,14 @@ from seahaze.render.scene import build_scene
 from seahaze.sceneio import SceneFileError, parse_scene_text
 from seahaze.spec import CameraSpec, SceneSpec, SequenceSpec
 from seahaze.world import build_geometry, frame_camera, ocean_params
-from test_annotations import framed_camera, projected_box, thinnest_rod_m, visible_points
+from test_annotations import (
+    assert_rails_set_no_edge,
+    framed_camera,
+    framing_parts,
+    projected_box,
+    thinnest_rod_m,
+    visible_points,
+)
 from test_sequences import SHIP
 
 # --------------------------------------------------------------------------------------------
@@ -186,9 +193,10 @@ def test_a_rolled_vessel_box_agrees_with_its_projected_mesh(kind, roll):
     geometry = build_geometry(spec, Camera.from_spec(spec.camera))
     (vessel,) = geometry.vessels
     visible = visible_points(vessel.parts)
-    rod = thinnest_rod_m(vessel.parts)
+    rod = thinnest_rod_m(framing_parts(vessel.parts))
     camera = _rolled_frame(framed_camera(12.0, visible, rod), visible, rod, roll)
     assert camera.width * camera.height < 400_000, (camera.width, camera.height)
+    assert_rails_set_no_edge(camera, vessel.parts)
     geo = passes.render_geometry(build_scene(spec, camera, geometry, [1000.0]))
     (box,) = boxes_from_instances(geo.instance, [vessel.class_id], geo.footprint_px)
     expected = projected_box(camera, visible)

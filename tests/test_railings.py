@@ -26,6 +26,13 @@ def _bodies(mesh):
     return [body.bounds for body in mesh.split(only_watertight=True)]
 
 
+def _feet(mesh) -> np.ndarray:
+    """(x, y) of each upright bar's axis: the mean of its vertices (a prism's corners sit
+    evenly round it)."""
+    uprights = [b for b in mesh.split(only_watertight=True) if np.ptp(b.vertices[:, 2]) > 0.5]
+    return np.array([b.vertices[:, :2].mean(axis=0) for b in uprights])
+
+
 def test_a_roof_rail_meets_the_load_line_figures():
     z_roof = 7.0
     rail = guard_rail(roof_edge_path(-6.0, 2.0, 2.5, z_roof))
@@ -43,7 +50,7 @@ def test_a_roof_rail_meets_the_load_line_figures():
     assert aft[-1][1] >= REG25_HEIGHT_M
     # Stanchions: from the deck to the top rail, at most 1.5 m apart along the 21 m edge
     # (8 + 5 + 8), both ends included.
-    feet = np.array([(0.5 * (b[0] + b[1]))[:2] for b in upright])
+    feet = _feet(rail)
     assert all(b[0][2] <= z_roof and b[1][2] >= z_roof + REG25_HEIGHT_M for b in upright)
     arc = _arc_positions(feet, roof_edge_path(-6.0, 2.0, 2.5, z_roof)[:, :2])
     assert arc[0] == pytest.approx(0.0, abs=1e-9) and arc[-1] == pytest.approx(21.0)
@@ -96,8 +103,10 @@ def test_a_deck_edge_rail_follows_the_sheer_and_stays_inside_the_side():
     assert (tops[:, 2] - deck).max() == pytest.approx(1.0 + 0.021, abs=0.03)
 
 
-@pytest.mark.parametrize("kind", ["tug", "fishing_boat", "passenger_ferry"])
-def test_working_boats_and_ferries_carry_rails_on_their_decks(kind):
+@pytest.mark.parametrize(
+    "kind", ["tug", "fishing_boat", "passenger_ferry", "bulk_carrier", "tanker"]
+)
+def test_working_boats_ferries_and_aft_houses_carry_rails_on_their_decks(kind):
     rng = np.random.default_rng(11)
     for _ in range(6):
         vessel = build_vessel(kind, None, rng)
@@ -112,3 +121,20 @@ def test_working_boats_and_ferries_carry_rails_on_their_decks(kind):
         assert (np.abs(rails.bounds[:, :2]) <= reach + 0.05).all()
         assert rails.bounds[1][2] <= house_top + REG25_HEIGHT_M + 0.05
         assert parts["railings"].material == parts["superstructure"].material
+
+
+def test_the_poop_rail_leaves_the_freefall_boat_its_way_off_the_stern():
+    rng = np.random.default_rng(5)
+    ramps = 0
+    for _ in range(8):
+        parts = {part.name: part for part in build_vessel("tanker", None, rng).parts}
+        if "lifeboat_ramp" not in parts:
+            continue
+        ramps += 1
+        # The boat's path off the ramp: aft of the ramp, as wide as it.
+        ramp = parts["lifeboat_ramp"].mesh.bounds
+        for lower, upper in _bodies(parts["railings"].mesh):
+            aft_of_ramp = lower[0] < ramp[0][0]
+            across_it = lower[1] < ramp[1][1] and upper[1] > ramp[0][1]
+            assert not (aft_of_ramp and across_it), (lower, upper, ramp)
+    assert ramps >= 4  # most ships carry a freefall boat

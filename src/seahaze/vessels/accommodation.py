@@ -37,6 +37,7 @@ from seahaze.vessels.geometry import (
 )
 from seahaze.vessels.materials import Material, material_from_srgb8
 from seahaze.vessels.parts import EMBED_M, PartSet, deck_at, deck_range, min_half_beam, u
+from seahaze.vessels.railings import RAIL_INSET_M, guard_rail, roof_edge_path, stern_edge_path
 
 __all__ = [
     "LIFEBOAT_ORANGE",
@@ -45,6 +46,7 @@ __all__ = [
     "add_davit_lifeboats",
     "add_freefall_lifeboat",
     "add_funnel_band",
+    "add_poop_rails",
     "add_radar_scanners",
 ]
 
@@ -169,9 +171,37 @@ def add_aft_house(
             ),
             paint,
         )
+    # A guard rail (ICLL Reg. 25, seahaze.vessels.railings) round the wheelhouse top (the
+    # compass deck); the poop's: add_poop_rails, once the stern's lifeboat is placed.
+    top = roof_edge_path(
+        wh_x0 + RAIL_INSET_M,
+        wh_x1 - RAIL_INSET_M,
+        half_width - RAIL_INSET_M,
+        z_roof + wh_h,
+        closed=True,
+    )
+    parts.add("railings", guard_rail(top), paint)
     return AftHouse(
         x_aft, x_fwd, half_width, z_deck, x_poop, deck_height, z_roof, z_roof + wh_h, wing_y
     )
+
+
+def add_poop_rails(
+    parts: PartSet, form: HullForm, house: AftHouse, paint: Material, gap_half_width: float
+) -> None:
+    """Guard rails round the poop deck aft of the house (the mooring deck; ICLL Reg. 25,
+    :mod:`seahaze.vessels.railings`), open across the transom over ``gap_half_width`` (m)
+    either side of the centreline where a freefall lifeboat's ramp runs out over the stern
+    (0: closed)."""
+    path = stern_edge_path(form, house.x_aft - 0.5, RAIL_INSET_M, rise=house.poop_height)
+    if gap_half_width > 0.0:
+        port = path[path[:, 1] >= gap_half_width]
+        starboard = path[path[:, 1] <= -gap_half_width]
+        runs = [run for run in (port, starboard) if len(run) >= 2]
+    else:
+        runs = [path]
+    for run in runs:
+        parts.add("railings", guard_rail(run), paint)
 
 
 def add_funnel_band(
@@ -245,9 +275,10 @@ def add_freefall_lifeboat(
     house: AftHouse,
     frame_paint: Material,
     rng: np.random.Generator,
-) -> None:
+) -> float:
     """A freefall lifeboat on its launching ramp at the stern, bow down aft at 30-35°: the
-    boat about 4.5 % L long (6.5-9.8 m), its ramp on two legs standing on the poop."""
+    boat about 4.5 % L long (6.5-9.8 m), its ramp on two legs standing on the poop. Returns
+    the ramp's half-width (m) where it runs out over the transom."""
     length = float(np.clip(0.045 * form.length, 6.5, 9.8))
     a = np.radians(u(rng, 30.0, 35.0))
     axis = np.array([np.cos(a), 0.0, np.sin(a)])
@@ -284,6 +315,7 @@ def add_freefall_lifeboat(
                 ),
                 frame_paint,
             )
+    return half
 
 
 def add_davit_lifeboats(

@@ -39,6 +39,7 @@ from seahaze.vessels.accommodation import (
     add_davit_lifeboats,
     add_freefall_lifeboat,
     add_funnel_band,
+    add_poop_rails,
     add_radar_scanners,
 )
 from seahaze.vessels.cargo_hull import DECK_HEIGHT_M, boot_top, foremast, merchant_hull
@@ -139,8 +140,10 @@ def _cargo_start(
     add_radar_scanners(parts, mast_x, house.z_top, mast_h, RADAR_GREY)
     # Freefall lifeboats on most ships built since about 2006; davit boats on older ones.
     davits = extra.random() < 0.2 and add_davit_lifeboats(parts, form, house, DECK_HEIGHT_M, white)
-    if not davits:
-        add_freefall_lifeboat(parts, form, house, white, extra)
+    # A freefall boat slides off its ramp over the transom: the poop's rail leaves it a gap
+    # with 0.5 m to spare either side.
+    gap = 0.0 if davits else add_freefall_lifeboat(parts, form, house, white, extra) + 0.5
+    add_poop_rails(parts, form, house, white, gap)
     return parts, form, house, (hull, white, deck)
 
 

@@ -19,7 +19,8 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from seahaze.vessels.geometry import HullForm, boxes, concatenate
+from seahaze.vessels.geometry import HullForm, concatenate
+from seahaze.vessels.parts import PartSet
 
 __all__ = [
     "COURSE_HEIGHTS_M",
@@ -27,9 +28,11 @@ __all__ = [
     "RAIL_INSET_M",
     "STANCHION_SIZE_M",
     "STANCHION_SPACING_M",
+    "add_house_rails",
     "deck_edge_path",
     "guard_rail",
     "roof_edge_path",
+    "stern_edge_path",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -44,6 +47,9 @@ STANCHION_SIZE_M = 0.05
 """Thickness of a stanchion's square bar (m)."""
 STANCHION_SPACING_M = 1.5
 """Greatest distance between neighbouring stanchions along the deck edge (m)."""
+COURSE_TOLERANCE_M = 0.01
+"""Farthest a course strays from the deck edge's path where it runs straight across a bend
+the path's points resolve (m): a third of a course's thickness."""
 RAIL_INSET_M = 0.15
 """How far inside a roof's or deck's edge the builders stand a guard rail's stanchions (m)."""
 
@@ -62,8 +68,10 @@ def guard_rail(path: FloatArray) -> trimesh.Trimesh:
     if len(path) < 2:
         raise ValueError("a guard rail's path has no length")
     bars = [_stanchions(path)]
+    # The courses run straight where the edge does: a bar per bend, not per point.
+    corners = path[_bends(path, COURSE_TOLERANCE_M)]
     for height, size in zip(COURSE_HEIGHTS_M, COURSE_SIZES_M, strict=True):
-        lifted = path + np.array([0.0, 0.0, height])
+        lifted = corners + np.array([0.0, 0.0, height])
         bars.append(_bars(lifted[:-1], lifted[1:], size))
     return concatenate(bars)
 
@@ -102,18 +110,93 @@ def deck_edge_path(form: HullForm, x_aft: float, inset: float, step: float = 1.0
     return np.vstack([port, starboard])
 
 
+def stern_edge_path(
+    form: HullForm, x_fwd: float, inset: float, rise: float = 0.0, step: float = 1.0
+) -> FloatArray:
+    """The hull's deck edge aft of ``x_fwd`` (m), ``inset`` (m) inside the side and ``rise``
+    (m) over the deck (a poop's deck a deck height up): from the port side at ``x_fwd`` aft
+    along the side, across the transom, and forward along the starboard side to ``x_fwd``, a
+    point every ``step`` metres or closer."""
+    x_stern = -form.half_length + inset
+    count = max(2, int(np.ceil((x_fwd - x_stern) / step)) + 1)
+    xs = np.linspace(x_fwd, x_stern, count)
+    ys = np.maximum(form.deck_half_beam(xs) - inset, 0.0)
+    zs = form.deck_z(xs) + rise
+    port = np.column_stack([xs, ys, zs])
+    starboard = np.column_stack([xs, -ys, zs])[::-1]
+    return np.vstack([port, starboard])
+
+
+def add_house_rails(
+    parts: PartSet,
+    roof_x: tuple[float, float],
+    roof_half_width: float,
+    roof_z: float | None,
+    top_x: tuple[float, float],
+    top_half_width: float,
+    top_z: float,
+) -> None:
+    """Guard rails all round a small craft's wheelhouse top (``top_x``,
+    aft to forward, inside its rakes; ``top_half_width``; at ``top_z``), where the mast
+    stands, and round the house roof aft of the wheelhouse (``roof_x``, ``roof_half_width``,
+    at ``roof_z``; None: no such roof), painted as the house."""
+    paint = parts.material_of("superstructure")
+    x0, x1 = top_x[0] + RAIL_INSET_M, top_x[1] - RAIL_INSET_M
+    if x1 - x0 > 0.5:
+        top = roof_edge_path(x0, x1, top_half_width - RAIL_INSET_M, top_z, closed=True)
+        parts.add("railings", guard_rail(top), paint)
+    x0, x1 = roof_x[0] + RAIL_INSET_M, roof_x[1] - 0.3  # clear of the wheelhouse's aft wall
+    if roof_z is not None and x1 - x0 > 0.5:
+        roof = roof_edge_path(x0, x1, roof_half_width - RAIL_INSET_M, roof_z)
+        parts.add("railings", guard_rail(roof), paint)
+
+
+def _bends(path: FloatArray, tolerance: float) -> NDArray[np.intp]:
+    """Indices of the points of ``path`` a polyline through them alone keeps within
+    ``tolerance`` (m) of every point: both ends, and greedily the farthest point each straight
+    run can reach."""
+    keep = [0]
+    while keep[-1] < len(path) - 1:
+        start, end = keep[-1], keep[-1] + 1
+        while end + 1 < len(path) and _within(path[start : end + 2], tolerance):
+            end += 1
+        keep.append(end)
+    return np.array(keep)
+
+
+def _within(run: FloatArray, tolerance: float) -> bool:
+    """Every point of ``run`` lies within ``tolerance`` of the chord from its first to its
+    last point."""
+    chord = run[-1] - run[0]
+    offsets = run - run[0]
+    along = offsets @ chord / max(float(chord @ chord), 1e-12)
+    return bool(np.all(np.linalg.norm(offsets - along[:, None] * chord, axis=1) <= tolerance))
+
+
 def _stanchions(path: FloatArray) -> trimesh.Trimesh:
     """Vertical bars from the deck to the top rail at both ends of ``path`` and evenly between,
-    at most ``STANCHION_SPACING_M`` apart along it."""
+    at most ``STANCHION_SPACING_M`` apart along it: triangular prisms of ``STANCHION_SIZE_M``
+    across (8 triangles where a box takes 12; at a fraction of a pixel the shape of a bar's
+    section does not show, and a ship's rails hold a hundred or more of them)."""
     steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
     arc = np.concatenate([[0.0], np.cumsum(steps)])
     count = int(np.ceil(arc[-1] / STANCHION_SPACING_M)) + 1
     at = np.linspace(0.0, arc[-1], max(count, 2))
     feet = np.column_stack([np.interp(at, arc, path[:, k]) for k in range(3)])
-    half = 0.5 * STANCHION_SIZE_M
-    lower = feet - np.array([half, half, 0.02])  # set 2 cm into the deck: no seam
-    upper = feet + np.array([half, half, COURSE_HEIGHTS_M[-1]])
-    return boxes(lower, upper)
+    feet[:, 2] -= 0.02  # set 2 cm into the deck: no seam
+    # An equilateral triangle of side STANCHION_SIZE_M round each foot, counter-clockwise
+    # seen from above, at the foot and 1.02 m up.
+    angles = np.radians([90.0, 210.0, 330.0])
+    ring = STANCHION_SIZE_M / np.sqrt(3.0) * np.column_stack([np.cos(angles), np.sin(angles)])
+    corners = np.zeros((6, 3))
+    corners[:3, :2] = corners[3:, :2] = ring
+    corners[3:, 2] = COURSE_HEIGHTS_M[-1] + 0.02
+    vertices = feet[:, None, :] + corners[None]
+    faces = np.array(
+        [[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [2, 0, 3], [2, 3, 5]]
+    )
+    faces = faces[None] + 6 * np.arange(len(feet))[:, None, None]
+    return trimesh.Trimesh(vertices.reshape(-1, 3), faces.reshape(-1, 3), process=False)
 
 
 _UNIT_BOX = trimesh.creation.box(bounds=np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]))

@@ -41,12 +41,7 @@ from seahaze.vessels.parts import (
     min_half_beam,
     u,
 )
-from seahaze.vessels.railings import (
-    RAIL_INSET_M,
-    deck_edge_path,
-    guard_rail,
-    roof_edge_path,
-)
+from seahaze.vessels.railings import RAIL_INSET_M, add_house_rails, deck_edge_path, guard_rail
 
 __all__ = ["build_fishing_boat", "build_tug"]
 
@@ -145,7 +140,7 @@ def build_fishing_boat(d: PrincipalDims, rng: np.random.Generator) -> list[Vesse
     )
     _wheelhouse_glazing(parts, x_fwd - wh_len, x_fwd, 0.9 * hw, z, wh_h, glass)
     z += wh_h
-    _rails_round_the_house(
+    add_house_rails(
         parts, (x_aft, x_fwd - wh_len), hw, lower_roof, (x_fwd - wh_len, x_fwd - 0.4), 0.9 * hw, z
     )
     if has_forecastle:  # the forecastle's top: rails round it from its break to the stem
@@ -314,30 +309,6 @@ def _gantry(parts: PartSet, form: HullForm, rng: np.random.Generator, paint: Mat
     # Hanging block (the net's sheave) under the top beam.
     s = max(0.25, 0.6 * r + 0.1)
     parts.add("gantry", box(x_top - 0.9 * r, x_top + 0.9 * r, -s, s, top - 2.2 * s, top), paint)
-
-
-def _rails_round_the_house(
-    parts: PartSet,
-    roof_x: tuple[float, float],
-    roof_half_width: float,
-    roof_z: float | None,
-    top_x: tuple[float, float],
-    top_half_width: float,
-    top_z: float,
-) -> None:
-    """Guard rails (:mod:`seahaze.vessels.railings`) all round the wheelhouse top (``top_x``,
-    aft to forward, inside its rakes; ``top_half_width``; at ``top_z``), where the mast
-    stands, and round the house roof aft of the wheelhouse (``roof_x``, ``roof_half_width``,
-    at ``roof_z``; None: no such roof), painted as the house."""
-    paint = parts.material_of("superstructure")
-    x0, x1 = top_x[0] + RAIL_INSET_M, top_x[1] - RAIL_INSET_M
-    if x1 - x0 > 0.5:
-        top = roof_edge_path(x0, x1, top_half_width - RAIL_INSET_M, top_z, closed=True)
-        parts.add("railings", guard_rail(top), paint)
-    x0, x1 = roof_x[0] + RAIL_INSET_M, roof_x[1] - 0.3  # clear of the wheelhouse's aft wall
-    if roof_z is not None and x1 - x0 > 0.5:
-        roof = roof_edge_path(x0, x1, roof_half_width - RAIL_INSET_M, roof_z)
-        parts.add("railings", guard_rail(roof), paint)
 
 
 def _radar(parts: PartSet, x: float, z: float, half_span: float, paint: Material) -> None:
@@ -523,7 +494,7 @@ def build_tug(d: PrincipalDims, rng: np.random.Generator) -> list[VesselPart]:
         aft_rake=0.2,
     )
     _wheelhouse_glazing(parts, wh_x1 - wh_len, wh_x1, wh_hw, wh_z0, wh_z1 - wh_z0, glass)
-    _rails_round_the_house(
+    add_house_rails(
         parts,
         (x_aft, wh_x1 - wh_len),
         hw,
