@@ -89,7 +89,7 @@ def write_doc(result: dict) -> None:
         "|---|---|---|---|---|",
     ]
     for row in result["rows"]:
-        whole = "with the install" if row["target"] == "test" else "kernels of the first cached"
+        whole = "with the install" if row["target"] == "test" else "its kernels partly cached"
         lines.append(
             f"| `make {row['target']}` | {row['passed']} | {row['skipped']} | "
             f"{row['pytest_s'] / 60:.1f} | {row['wall_s'] / 60:.1f} ({whole}) |"
