@@ -104,7 +104,7 @@ def test_a_deck_edge_rail_follows_the_sheer_and_stays_inside_the_side():
 
 
 @pytest.mark.parametrize(
-    "kind", ["tug", "fishing_boat", "passenger_ferry", "bulk_carrier", "tanker"]
+    "kind", ["tug", "fishing_boat", "passenger_ferry", "bulk_carrier", "tanker", "container_ship"]
 )
 def test_working_boats_ferries_and_aft_houses_carry_rails_on_their_decks(kind):
     rng = np.random.default_rng(11)

@@ -42,6 +42,7 @@ from seahaze.vessels.model import VesselPart
 from seahaze.vessels.parts import EMBED_M, PartSet, PrincipalDims, deck_range, min_half_beam, u
 from seahaze.vessels.railings import (
     RAIL_INSET_M,
+    add_house_rails,
     deck_edge_path,
     guard_rail,
     roof_edge_path,
@@ -122,7 +123,7 @@ def build_container_ship(d: PrincipalDims, rng: np.random.Generator) -> list[Ves
     bridge_floor = stack_top + u(rng, 2.5, 5.0)
     n_decks = max(2, int(np.ceil((bridge_floor - z_deck) / DECK_HEIGHT_M)))
     half_w = min(u(rng, 0.28, 0.4) * beam, min_half_beam(form, x_aft, x_fwd) - 0.5)
-    z_roof, z_top = parts.add_accommodation(
+    z_roof, z_top, wheelhouse = parts.add_accommodation(
         form,
         x_aft,
         x_fwd,
@@ -134,6 +135,9 @@ def build_container_ship(d: PrincipalDims, rng: np.random.Generator) -> list[Ves
         paint=white,
         glass=WINDOW_GLASS[0],
     )
+    # Guard rails round the compass deck (the wheelhouse top, as wide as the wings) and the
+    # house roof aft of the wheelhouse.
+    add_house_rails(parts, (x_aft, wheelhouse[0]), half_w, z_roof, wheelhouse, 0.5 * beam, z_top)
     parts.add_mast(
         x_fwd - 0.4 * house_len,
         0.0,

@@ -172,10 +172,11 @@ class PartSet:
         wheelhouse_length: float,
         paint: Material,
         glass: Material,
-    ) -> tuple[float, float]:
+    ) -> tuple[float, float, tuple[float, float]]:
         """Accommodation block with a full-width wheelhouse (bridge wings) on top.
 
-        Returns (z of the house roof, z of the wheelhouse roof) in metres.
+        Returns the z of the house roof and of the wheelhouse roof, and the wheelhouse's aft and
+        forward ends (x), in metres.
         """
         z_deck, _ = deck_range(form, x_aft, x_fwd)
         z_roof = z_deck + n_decks * deck_height
@@ -212,7 +213,7 @@ class PartSet:
             ),
             glass,
         )
-        return z_roof, z_roof + wh_height
+        return z_roof, z_roof + wh_height, (wh_x0, wh_x1)
 
     def add_window_band(
         self,

@@ -136,10 +136,10 @@ def add_house_rails(
     top_half_width: float,
     top_z: float,
 ) -> None:
-    """Guard rails all round a small craft's wheelhouse top (``top_x``,
-    aft to forward, inside its rakes; ``top_half_width``; at ``top_z``), where the mast
-    stands, and round the house roof aft of the wheelhouse (``roof_x``, ``roof_half_width``,
-    at ``roof_z``; None: no such roof), painted as the house."""
+    """Guard rails all round a wheelhouse top (``top_x``, aft to forward, inside its rakes;
+    ``top_half_width``; at ``top_z``), where the mast stands, and round the house roof aft of
+    the wheelhouse (``roof_x``, ``roof_half_width``, at ``roof_z``; None: no such roof),
+    painted as the house (the part ``superstructure``)."""
     paint = parts.material_of("superstructure")
     x0, x1 = top_x[0] + RAIL_INSET_M, top_x[1] - RAIL_INSET_M
     if x1 - x0 > 0.5:
