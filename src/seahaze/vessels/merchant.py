@@ -358,9 +358,6 @@ def build_passenger_ferry(d: PrincipalDims, rng: np.random.Generator) -> list[Ve
             # The open deck this tier's roof leaves aft of the next tier: railed round its end.
             end = roof_edge_path(xa + RAIL_INSET_M, xa + step_aft, hw - RAIL_INSET_M, z)
             parts.add("railings", guard_rail(end), white)
-    # The sun deck: the top tier's roof aft of the bridge, railed round its sides and end.
-    top_hw = hw - RAIL_INSET_M
-    sun_deck_aft = x_aft + (n_tiers - 1) * step_aft + RAIL_INSET_M
     # The open foredeck forward of the superstructure, railed along the hull's deck edge.
     parts.add("railings", guard_rail(deck_edge_path(form, x_fwd + 1.0, RAIL_INSET_M)), white)
     top_aft, top_fwd = x_aft + (n_tiers - 1) * step_aft, x_fwd - (n_tiers - 1) * step_fwd
@@ -383,9 +380,10 @@ def build_passenger_ferry(d: PrincipalDims, rng: np.random.Generator) -> list[Ve
         glass,
     )
     z_top = z + tier_h
-    sun_deck_fwd = bx1 - bridge_len - 0.3
+    # The sun deck: the top tier's roof aft of the bridge, railed round its sides and end.
+    sun_deck_aft, sun_deck_fwd = top_aft + RAIL_INSET_M, bx1 - bridge_len - 0.3
     if sun_deck_fwd - sun_deck_aft > 2.0:
-        sun_deck = roof_edge_path(sun_deck_aft, sun_deck_fwd, top_hw, z)
+        sun_deck = roof_edge_path(sun_deck_aft, sun_deck_fwd, hw - RAIL_INSET_M, z)
         parts.add("railings", guard_rail(sun_deck), white)
     parts.add_mast(
         bx1 - 0.5 * bridge_len,

@@ -7,9 +7,9 @@ courses, the opening below the lowest not over 230 mm and the other courses not 
 apart; stanchions about 1.5 m apart. Small craft codes ask the same heights (e.g. the UK MCA
 small vessel code, section 22.2: 1000 mm, 230 mm, 380 mm).
 
-The bars are a few centimetres thick (a 42 mm top rail, 27 mm courses, 50 mm stanchions):
-a third of a pixel at 200 m in a 1280×720 frame of 60°, so what a camera sees of them is a
-faint line over a deck edge that otherwise ends flat against the sky, as railings read in
+The bars are a few centimetres thick (a 42 mm top rail, 27 mm courses, 50 mm stanchions): a
+sixth to a third of a pixel at 200 m in a 1280×720 frame of 60°, so what a camera sees of them
+is a faint line over a deck edge that otherwise ends flat against the sky, as railings read in
 photographs of ships. All dimensions in metres, in the vessel frame (x forward, y port, z up).
 """
 
@@ -44,12 +44,12 @@ COURSE_SIZES_M = (0.027, 0.027, 0.042)
 """Thickness of each course's square bar (m): 1 in. pipe for the courses, 1 1/4 in. (42.4 mm)
 for the top rail."""
 STANCHION_SIZE_M = 0.05
-"""Thickness of a stanchion's square bar (m)."""
+"""Side of a stanchion's triangular section (m)."""
 STANCHION_SPACING_M = 1.5
 """Greatest distance between neighbouring stanchions along the deck edge (m)."""
 COURSE_TOLERANCE_M = 0.01
 """Farthest a course strays from the deck edge's path where it runs straight across a bend
-the path's points resolve (m): a third of a course's thickness."""
+the path's points resolve (m): about a third of a course's thickness."""
 RAIL_INSET_M = 0.15
 """How far inside a roof's or deck's edge the builders stand a guard rail's stanchions (m)."""
 
