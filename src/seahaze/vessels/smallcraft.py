@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from seahaze.vessels.fishing_gear import add_stern_gantry, add_trawl_doors
 from seahaze.vessels.geometry import (
     HullForm,
     box,
@@ -162,8 +163,9 @@ def build_fishing_boat(d: PrincipalDims, rng: np.random.Generator) -> list[Vesse
         work_aft, work_fwd = x_fwd + 0.3, form.half_length - form.forecastle_length - 0.05 * length
     gear = pick_material(MACHINERY_PAINTS, extra)
     draw = rng.random()  # the builder drew the gantry's place and height from rng below 0.6
+    gantry = None
     if trawler or draw < 0.5:
-        _gantry(parts, form, rng if draw < 0.6 else extra, gear)
+        gantry = add_stern_gantry(parts, form, rng if draw < 0.6 else extra, gear)
     elif draw < 0.6:
         rng.uniform(size=2)  # the place and height of a gantry no longer built here
     if work_fwd - work_aft > 0.12 * length:
@@ -233,6 +235,8 @@ def build_fishing_boat(d: PrincipalDims, rng: np.random.Generator) -> list[Vesse
                 ),
                 gear,
             )
+    if trawler and gantry is not None:
+        add_trawl_doors(parts, form, gantry, gear)
     return parts.to_parts()
 
 
@@ -265,50 +269,6 @@ def _rust_streaks(parts: PartSet, form: HullForm, rng: np.random.Generator) -> N
             ),
             RUST,
         )
-
-
-def _gantry(parts: PartSet, form: HullForm, rng: np.random.Generator, paint: Material) -> None:
-    """Stern A-frame gantry for the trawl doors and net: two legs at the sides of the stern,
-    raked aft a little, joined by a top beam with a hanging block. On 20-40 m stern trawlers it
-    stands about 4-8 m above the deck (FAO FTP 267 drawings); legs about 1 % L thick."""
-    length = form.length
-    xg = -form.half_length + u(rng, 0.03, 0.06) * length
-    zg = deck_at(form, xg)
-    top = zg + u(rng, 0.12, 0.2) * length + 1.5
-    half = min_half_beam(form, xg - 0.5, xg + 0.5)
-    r = max(0.12, 0.01 * length)
-    rake = min(0.1 * (top - zg), xg + form.half_length - r - 0.05)
-    x_top = xg - max(rake, 0.0)
-    for side in (-1.0, 1.0):
-        parts.add(
-            "gantry",
-            cylinder_between(
-                (xg, side * (0.85 * half - r), zg - EMBED_M), (x_top, side * 0.6 * half, top), r
-            ),
-            paint,
-        )
-    parts.add(
-        "gantry",
-        cylinder_between((x_top, -0.6 * half - r, top), (x_top, 0.6 * half + r, top), r),
-        paint,
-    )
-    # Forward braces from the top of each leg down to the deck: with the legs they make the
-    # "A" that shows from the side.
-    x_foot = min(xg + 0.35 * (top - zg), form.half_length)
-    z_foot = deck_at(form, x_foot)
-    for side in (-1.0, 1.0):
-        parts.add(
-            "gantry",
-            cylinder_between(
-                (x_foot, side * (0.8 * half - r), z_foot - EMBED_M),
-                (x_top, side * 0.6 * half, top - r),
-                0.8 * r,
-            ),
-            paint,
-        )
-    # Hanging block (the net's sheave) under the top beam.
-    s = max(0.25, 0.6 * r + 0.1)
-    parts.add("gantry", box(x_top - 0.9 * r, x_top + 0.9 * r, -s, s, top - 2.2 * s, top), paint)
 
 
 def _radar(parts: PartSet, x: float, z: float, half_span: float, paint: Material) -> None:
