@@ -1,10 +1,10 @@
 """A stern trawler's gear at the stern: the A-frame gantry and the trawl doors hung from it.
 
-Proportions are typical published values, not design data: the gantry from FAO Fisheries
-Technical Paper 267 (Definition and classification of fishing gear / fishing vessel types)
-drawings of 20-40 m stern trawlers; the doors (otter boards) as they hang stowed in photographs
-of such trawlers in port, one at each quarter outside the hull, their size a visual choice in
-proportion to the boat (below). Metres; vessel frame x forward, y port, z up, waterline z = 0.
+Proportions are typical values, not design data: the gantry from the FAO Fisheries Technical
+Paper 267 drawings of 20-40 m stern trawlers; the doors (otter boards) hung at the stern
+quarters outside the hull, where a stern trawler stows them with its gear aboard, their size a
+visual choice in proportion to the boat (below). Metres; vessel frame x forward, y port, z up,
+waterline z = 0.
 """
 
 from __future__ import annotations
@@ -21,10 +21,9 @@ __all__ = ["DOOR_LENGTH_RATIO", "Gantry", "add_stern_gantry", "add_trawl_doors"]
 
 DOOR_LENGTH_RATIO = 0.1
 """A trawl door's length over the boat's (clipped to 1.5-3.5 m): a 25 m trawler's doors are
-2.5 m long and 1.4 m high, about 3.4 m² (a visual choice; bottom-trawl doors are sold from
-about 1 to 10 m²)."""
+2.5 m long and 1.4 m high, about 3.4 m² (a visual choice, not a cited size)."""
 DOOR_HEIGHT_RATIO = 0.55
-"""A door's height over its length: the usual oblong of rectangular and oval doors."""
+"""A door's height over its length (a visual choice: an oblong plate)."""
 DOOR_THICKNESS_M = 0.12
 """Thickness of a door's body (m): a steel plate with its frame and shoe."""
 
