@@ -37,7 +37,7 @@ from seahaze.vessels.geometry import (
 )
 from seahaze.vessels.materials import Material, material_from_srgb8
 from seahaze.vessels.parts import EMBED_M, PartSet, deck_at, deck_range, min_half_beam, u
-from seahaze.vessels.railings import RAIL_INSET_M, guard_rail, roof_edge_path, stern_edge_path
+from seahaze.vessels.railings import RAIL_INSET_M, add_house_rails, guard_rail, stern_edge_path
 
 __all__ = [
     "LIFEBOAT_ORANGE",
@@ -173,14 +173,9 @@ def add_aft_house(
         )
     # A guard rail (ICLL Reg. 25, seahaze.vessels.railings) round the wheelhouse top (the
     # compass deck); the poop's: add_poop_rails, once the stern's lifeboat is placed.
-    top = roof_edge_path(
-        wh_x0 + RAIL_INSET_M,
-        wh_x1 - RAIL_INSET_M,
-        half_width - RAIL_INSET_M,
-        z_roof + wh_h,
-        closed=True,
+    add_house_rails(
+        parts, (x_aft, wh_x0), half_width, None, (wh_x0, wh_x1), half_width, z_roof + wh_h
     )
-    parts.add("railings", guard_rail(top), paint)
     return AftHouse(
         x_aft, x_fwd, half_width, z_deck, x_poop, deck_height, z_roof, z_roof + wh_h, wing_y
     )

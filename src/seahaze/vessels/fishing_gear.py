@@ -30,13 +30,11 @@ DOOR_THICKNESS_M = 0.12
 
 @dataclass(frozen=True)
 class Gantry:
-    """Where a stern gantry stands (m): its legs' feet (station and deck height) and its top
-    beam (station and height)."""
+    """Where a stern gantry's legs stand (m): their station and the deck's height there, what
+    the trawl doors hang beside."""
 
-    x_foot: float
-    z_foot: float
-    x_top: float
-    top: float
+    x_legs: float
+    z_deck: float
 
 
 def add_stern_gantry(
@@ -83,7 +81,7 @@ def add_stern_gantry(
     # Hanging block (the net's sheave) under the top beam.
     s = max(0.25, 0.6 * r + 0.1)
     parts.add("gantry", box(x_top - 0.9 * r, x_top + 0.9 * r, -s, s, top - 2.2 * s, top), paint)
-    return Gantry(xg, zg, x_top, top)
+    return Gantry(xg, zg)
 
 
 def add_trawl_doors(parts: PartSet, form: HullForm, gantry: Gantry, paint: Material) -> None:
@@ -93,9 +91,9 @@ def add_trawl_doors(parts: PartSet, form: HullForm, gantry: Gantry, paint: Mater
     draws, so the vessels after this one are built as before."""
     length = float(np.clip(DOOR_LENGTH_RATIO * form.length, 1.5, 3.5))
     height = DOOR_HEIGHT_RATIO * length
-    x0 = max(gantry.x_foot - 0.3 * length, -form.half_length + 0.1)
+    x0 = max(gantry.x_legs - 0.3 * length, -form.half_length + 0.1)
     x1 = x0 + length
-    z1 = gantry.z_foot + 0.8
+    z1 = gantry.z_deck + 0.8
     z0 = max(z1 - height, 0.3)
     # Outside the hull over the door's whole height and length (the topsides flare out).
     xs, zs = np.meshgrid(np.linspace(x0, x1, 5), np.linspace(z0, z1, 5))

@@ -97,17 +97,7 @@ def deck_edge_path(form: HullForm, x_aft: float, inset: float, step: float = 1.0
     port side at ``x_aft`` round the bow to the starboard side at ``x_aft``, at the deck's
     height, a point every ``step`` metres or closer so the rail follows the sheer and the
     bow's curve."""
-    x_bow = form.half_length - inset
-    count = max(2, int(np.ceil((x_bow - x_aft) / step)) + 1)
-    xs = np.linspace(x_aft, x_bow, count)
-    ys = np.maximum(form.deck_half_beam(xs) - inset, 0.0)
-    zs = form.deck_z(xs)
-    port = np.column_stack([xs, ys, zs])
-    starboard = np.column_stack([xs, -ys, zs])[::-1]
-    # The bow's two points meet near the stem; keep one of them if they coincide.
-    if np.allclose(port[-1], starboard[0]):
-        starboard = starboard[1:]
-    return np.vstack([port, starboard])
+    return _round_the_end(form, x_aft, form.half_length - inset, inset, 0.0, step)
 
 
 def stern_edge_path(
@@ -117,13 +107,24 @@ def stern_edge_path(
     (m) over the deck (a poop's deck a deck height up): from the port side at ``x_fwd`` aft
     along the side, across the transom, and forward along the starboard side to ``x_fwd``, a
     point every ``step`` metres or closer."""
-    x_stern = -form.half_length + inset
-    count = max(2, int(np.ceil((x_fwd - x_stern) / step)) + 1)
-    xs = np.linspace(x_fwd, x_stern, count)
+    return _round_the_end(form, x_fwd, -form.half_length + inset, inset, rise, step)
+
+
+def _round_the_end(
+    form: HullForm, x_start: float, x_end: float, inset: float, rise: float, step: float
+) -> FloatArray:
+    """The deck edge ``inset`` inside the side and ``rise`` over the deck, from the port side
+    at ``x_start`` to ``x_end`` (the bow or the stern), across, and back along the starboard
+    side, a point every ``step`` metres or closer. Where the two sides meet in one point (a
+    stem), it is kept once."""
+    count = max(2, int(np.ceil(abs(x_end - x_start) / step)) + 1)
+    xs = np.linspace(x_start, x_end, count)
     ys = np.maximum(form.deck_half_beam(xs) - inset, 0.0)
     zs = form.deck_z(xs) + rise
     port = np.column_stack([xs, ys, zs])
     starboard = np.column_stack([xs, -ys, zs])[::-1]
+    if np.allclose(port[-1], starboard[0]):
+        starboard = starboard[1:]
     return np.vstack([port, starboard])
 
 
