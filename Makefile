@@ -7,11 +7,13 @@
 # and, beside them:
 #   make test-slow  the proofs marked `slow` (pyproject.toml): a mode against volpath, a kill and
 #                 resume, a law measured on rendered images; CI (.ci/run) runs them after make test
+#   make realism-deps  the realism benchmark's detector (optional; Node.js and npm packages:
+#                 scripts/realism/install.sh); then scripts/bench_realism.py runs
 VENV  := .venv
 STAMP := $(VENV)/.seahaze-installed
 OUT   ?= out/default
 
-.PHONY: render test test-slow lint docs bench
+.PHONY: render test test-slow lint docs bench realism-deps
 render: $(STAMP)
 	$(VENV)/bin/seahaze render scenes/default.yaml --vis 300..4000 --out $(OUT)
 
@@ -29,6 +31,9 @@ docs: $(STAMP)
 
 bench: $(STAMP)
 	$(VENV)/bin/python scripts/bench_passes.py
+
+realism-deps:
+	bash scripts/realism/install.sh
 
 $(STAMP): pyproject.toml scripts/bootstrap.sh
 	bash scripts/bootstrap.sh
