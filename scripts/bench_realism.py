@@ -177,15 +177,20 @@ def read_as(entry: dict) -> str:
     return f"{share:.0%}" + (f" ({named})" if named else "")
 
 
-def class_row(runs: list[dict], cls: str) -> str:
-    figures = [
-        cell(runs, ("classes", cls, "all", "vessels"), str),
-        cell(runs, ("classes", cls, "all", "recall")),
-        cell(runs, ("classes", cls, "all", "ap50")),
-        cell(runs, ("classes", cls, "large", "vessels"), str),
-        cell(runs, ("classes", cls, "large", "recall")),
-        cell(runs, ("classes", cls), read_as),
+def group_cells(runs: list[dict], at: tuple[str, ...]) -> list[str]:
+    """The cells of one class or level (``at``: its keys in a result): vessels, recall and
+    AP50 of all its vessels, then vessels and recall of those ≥ 16 px."""
+    return [
+        cell(runs, (*at, "all", "vessels"), str),
+        cell(runs, (*at, "all", "recall")),
+        cell(runs, (*at, "all", "ap50")),
+        cell(runs, (*at, "large", "vessels"), str),
+        cell(runs, (*at, "large", "recall")),
     ]
+
+
+def class_row(runs: list[dict], cls: str) -> str:
+    figures = [*group_cells(runs, ("classes", cls)), cell(runs, ("classes", cls), read_as)]
     return f"| {cls} | " + " | ".join(figures) + " |"
 
 
@@ -196,14 +201,7 @@ def band_row(runs: list[dict], band: str) -> str:
 
 
 def level_row(runs: list[dict], level: str) -> str:
-    figures = [
-        cell(runs, ("levels", level, "all", "vessels"), str),
-        cell(runs, ("levels", level, "all", "recall")),
-        cell(runs, ("levels", level, "all", "ap50")),
-        cell(runs, ("levels", level, "large", "vessels"), str),
-        cell(runs, ("levels", level, "large", "recall")),
-    ]
-    return f"| {level} | " + " | ".join(figures) + " |"
+    return f"| {level} | " + " | ".join(group_cells(runs, ("levels", level))) + " |"
 
 
 def document(runs: list[dict]) -> str:
