@@ -162,3 +162,9 @@ def test_the_detector_boxes_painted_shapes_where_they_are():
                 x0, x1 = 640 - x1, 640 - x0
             painted = Vessel("i", "tug", x0, y0, x1, y1)
             assert max(realism.iou(painted, d) for d in best) >= 0.7
+
+
+@pytest.mark.skipif(not INSTALLED, reason="detector not installed (make realism-deps)")
+def test_a_detector_past_its_time_says_so():
+    with pytest.raises(centernet.DetectorUnavailableError, match="ran past"):
+        centernet.detect([np.zeros((9, 16, 3), np.uint8)], timeout_s=0.01)

@@ -125,9 +125,10 @@ def detect(
     images: Sequence[np.ndarray], project: Path | None = None, timeout_s: float = 3600.0
 ) -> list[list[Detection]]:
     """The model's detections (its 100 best, every score) for each of ``images`` (H×W×3 uint8
-    RGB), in their own pixels. One Node.js process runs them all.
+    RGB), in their own pixels. One Node.js process runs them all, within ``timeout_s``.
 
-    Raises :class:`DetectorUnavailableError` when the detector is not installed or Node.js fails.
+    Raises :class:`DetectorUnavailableError` when the detector is not installed, Node.js
+    fails or runs past ``timeout_s``.
     """
     project = default_project() if project is None else Path(project)
     missing = missing_parts(project)
@@ -144,13 +145,18 @@ def detect(
         out = Path(tmp) / "detections.json"
         job = Path(tmp) / "job.json"
         job.write_text(json.dumps({"inputs": inputs, "size": INPUT_SIZE, "out": str(out)}))
-        run = subprocess.run(
-            ["node", str(project / "detect.mjs"), str(job)],
-            cwd=project,
-            capture_output=True,
-            text=True,
-            timeout=timeout_s,
-        )
+        try:
+            run = subprocess.run(
+                ["node", str(project / "detect.mjs"), str(job)],
+                cwd=project,
+                capture_output=True,
+                text=True,
+                timeout=timeout_s,
+            )
+        except subprocess.TimeoutExpired as err:
+            raise DetectorUnavailableError(
+                f"{project / 'detect.mjs'} ran past {timeout_s:g} s on {len(images)} images"
+            ) from err
         if run.returncode != 0 or not out.is_file():
             tail = (run.stderr or run.stdout).strip().splitlines()[-3:]
             raise DetectorUnavailableError(
