@@ -22,8 +22,10 @@ detections (``x0, y0, x1, y1, score, label`` in pixels). ``--code`` renders with
 worktree of an earlier commit: its own code and its own ``scenes/msvd.yaml``); ``--before``
 shows such a run's figures beside this one's, cell by cell.
 
+``--camera-model`` renders with the camera model's defaults on (blur and sensor noise).
+
 Usage: python scripts/bench_realism.py [--code DIR] [--scene YAML] [--scenes 48]
-       [--res 640x360] [--spp 16] [--out out/realism] [--before DIR] [--doc]
+       [--res 640x360] [--spp 16] [--camera-model] [--out out/realism] [--before DIR] [--doc]
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ from collections import Counter
 from pathlib import Path
 
 import numpy as np
+import yaml
 from PIL import Image
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -122,9 +125,23 @@ def scores(by_level: dict) -> dict:
     return {"classes": classes, "bands": bands, "levels": levels}
 
 
+def with_camera_model(scene: Path, out: Path) -> Path:
+    """A copy of ``scene`` beside ``out`` with the camera model's defaults on
+    (``render.camera_model: {}``), under the scene's own file name."""
+    doc = yaml.safe_load(scene.read_text())
+    doc.setdefault("render", {})["camera_model"] = {}
+    folder = out.parent / f"{out.name}-scene"
+    folder.mkdir(parents=True, exist_ok=True)
+    copy = folder / scene.name
+    copy.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return copy
+
+
 def run(args: argparse.Namespace) -> dict:
     """Render the set, detect, score; the result as written to ``OUT/realism.json``."""
     scene = args.scene or args.code / "scenes" / "msvd.yaml"
+    if args.camera_model:
+        scene = with_camera_model(scene, args.out)
     render_s = render_set(args.out, scene, args.scenes, args.res, args.spp, args.code)
     dataset = load_dataset(args.out)
     start = time.perf_counter()
@@ -150,6 +167,7 @@ def run(args: argparse.Namespace) -> dict:
         "scenes": args.scenes,
         "res": args.res,
         "spp": args.spp,
+        "camera_model": args.camera_model,
         "render_s": render_s,
         "detect_s": detect_s,
         "images": sum(len(f) for _, f in by_level.values()),
@@ -263,6 +281,11 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "realism")
     parser.add_argument(
         "--before", type=Path, help="an earlier run's OUT folder, shown before this one"
+    )
+    parser.add_argument(
+        "--camera-model",
+        action="store_true",
+        help="render with the camera model's defaults (render.camera_model: {})",
     )
     parser.add_argument("--doc", action="store_true", help="write docs/benchmarks.md")
     args = parser.parse_args()
