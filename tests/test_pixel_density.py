@@ -98,7 +98,8 @@ def test_a_camera_ray_reads_the_ratio_of_its_own_pixel():
     index = np.arange(height * width, dtype=np.float64).reshape(height, width)
     # +1: a ratio of 0 would be clamped; the ratios told apart by their offsets.
     suns = np.stack([index + 2.0, index + 3.0])
-    lookup = PixelRatio(sensor, PixelRatios(index + 1.0, suns, index + 4.0, index + 5.0))
+    bounced = np.stack([index + 6.0, index + 7.0])
+    lookup = PixelRatio(sensor, PixelRatios(index + 1.0, suns, index + 4.0, index + 5.0, bounced))
     rng = np.random.default_rng(2)
     pixel = rng.integers(0, height * width, 4000)
     # Anywhere inside the pixel, its corners excepted (a float32 step from the next one).
@@ -107,8 +108,8 @@ def test_a_camera_ray_reads_the_ratio_of_its_own_pixel():
     y = (pixel // width + jitter[1]) / height
     film = mi.Point2f(mi.Float(x), mi.Float(y))
     ray, _ = sensor.sample_ray(0.0, 0.5, film, mi.Point2f(0.5, 0.5))
-    view, (sun_0, sun_1), surface, bounce = lookup.at(ray, mi.Bool(True))
-    got = [np.asarray(r, np.float64) for r in (view, sun_0, sun_1, surface, bounce)]
+    view, (sun_0, sun_1), surface, bounce, (sun_b0, sun_b1) = lookup.at(ray, mi.Bool(True))
+    got = [np.asarray(r, np.float64) for r in (view, sun_0, sun_1, surface, bounce, sun_b0, sun_b1)]
     for offset, ratio in enumerate(got, start=1):
         np.testing.assert_array_equal(ratio - offset, pixel)
     assert dr.width(ray.d) == pixel.size
@@ -193,3 +194,48 @@ def test_the_seas_bounce_ratio_is_its_mirrored_rays():
         q = points[k] + s[:, None] * up
         field = simpson(medium.density_at(q[:, 0], q[:, 1], q[:, 2]), x=s)
         np.testing.assert_allclose(got[k], field / length, rtol=3e-4)
+
+
+def test_the_seas_sun_bounce_ratio_is_its_mirrored_rays_sun_ratio():
+    """On a sea pixel, each level's ``sun_bounce`` is the sun ratio of the camera ray
+    mirrored in a flat sea: rebuilt here from the mirrored ray's 24 points, each point's depth
+    toward the sun by Simpson's rule through the field (the profile's in closed form); on a
+    vessel pixel it is ``sun_surface``. A field that is the profile times c gives c."""
+    from seahaze.render.pixel_density import AIR_POINTS, AIR_REACH_M, level_sun_ratio
+    from seahaze.render.pixel_density import pixel_ratios as ratios_of
+    from seahaze.world import sun_direction
+
+    medium = NonUniformHaze(SLAB, HazeField(PATCHES), 1.1)
+    geometry = _session(medium).pixels
+    sun = sun_direction(SPEC.sun.elevation_deg, SPEC.sun.azimuth_deg)
+    sigmas = np.array([3.912 / 300.0, 3.912 / 4000.0])
+    got = ratios_of(medium, geometry, sun, sigmas)
+    assert got.view.size <= 320 * 180  # one grid point per pixel: no spreading
+    vessel = geometry.instance >= 0
+    np.testing.assert_array_equal(
+        got.sun_bounce[:, vessel], got.sun_surface[None, vessel].repeat(2, 0)
+    )
+    sea = np.argwhere(np.isfinite(geometry.distance_m) & ~vessel)
+    origin = geometry.origin.astype(np.float64)
+    for row, col in sea[np.random.default_rng(4).choice(len(sea), 3, replace=False)]:
+        d = geometry.directions[row, col].astype(np.float64)
+        p = origin + float(geometry.distance_m[row, col]) * d
+        up = d * np.array([1.0, 1.0, -1.0])
+        reach = min((SLAB.top - p[2]) / up[2], RAY_REACH_M, AIR_REACH_M)
+        edges = (np.arange(AIR_POINTS + 1) / AIR_POINTS) ** 2
+        s = 0.5 * (edges[:-1] + edges[1:]) * reach
+        points = p + s[:, None] * up
+        mass = medium.density_at(points[:, 0], points[:, 1], points[:, 2]) * np.diff(edges) * reach
+        field, profile = [], []
+        for q in points:
+            length = (SLAB.top - q[2]) / sun[2]
+            t = np.linspace(0.0, length, 20_001)
+            ray = q + t[:, None] * sun
+            field.append(simpson(medium.density_at(ray[:, 0], ray[:, 1], ray[:, 2]), x=t))
+            profile.append(length)
+        for k, sigma in enumerate(sigmas):
+            want = level_sun_ratio(sigma, mass, np.array(field), np.array(profile))
+            np.testing.assert_allclose(got.sun_bounce[k, row, col], want, rtol=1e-3)
+    assert not np.allclose(got.sun_bounce[:, ~vessel], got.sun_surface[None, ~vessel])
+    uniform = ratios_of(NonUniformHaze(SLAB, HazeField(), 1.7), geometry, sun, sigmas)
+    np.testing.assert_allclose(uniform.sun_bounce, 1.7, rtol=1e-6)

@@ -105,7 +105,7 @@ across the sea in the physical mode")."""
 UNVALIDATED_WITH_BANK = ("physical",)
 """Modes not validated at any level in a fog bank (``haze.bank``): ``physical``'s equivalent
 profile spreads a ray's haze evenly along it, where a bank puts it all beyond the edge (sea
-+4 … +7 %, sky −2 … −6 % at 1000–4000 m)."""
++4 … +6 %, sky −2 … −6 % at 1000–4000 m; −14 … −20 % at 300 m)."""
 
 # measured by scripts/measure_estimates.py (docs/limits.md, "The estimate"); bytes, wall seconds
 BASE_BYTES = {"physical": 6.34e08, "reference": 5.03e08, "asm": 4.68e08}

@@ -18,10 +18,10 @@ density ratios of the camera path's pixel, and every answer is the profile's sca
 Along the camera segment reduced lengths and heights are the profile's times the ``view``
 ratio ``r`` (a reduced distance divided by it to find its point) and each level's depths
 toward the sun times its own ``sun_air`` ratio; along the later segments, which leave a
-surface, lengths are times the ``bounce`` ratio and depths toward the sun times
-``sun_surface``, as are the rays from a surface toward the lights. None, as for every other
-haze, leaves the kernels exactly as they were: the per-level depths toward the sun are then
-one value.
+surface, lengths are times the ``bounce`` ratio and depths toward the sun times each level's
+``sun_bounce``; the rays from a surface toward the lights are times ``sun_surface``. None,
+as for every other haze, leaves the kernels exactly as they were: the per-level depths toward
+the sun are then one value.
 """
 
 from __future__ import annotations
@@ -50,8 +50,9 @@ class PassLevels:
         self.medium, self.n_levels, self.grey = medium, n_levels, grey
         self.ops = drjit_ops()
         self.pixel: Any = None
-        """Per lane, the ``view``, per-level ``sun_air``, ``sun_surface`` and ``bounce``
-        density ratios of the camera path's pixel (drjit Floats), or None: the medium's
+        """Per lane, the ``view``, per-level ``sun_air``, ``sun_surface``, ``bounce`` and
+        per-level ``sun_bounce`` density ratios of the camera path's pixel (drjit Floats), or
+        None: the medium's
         profile as it is (module docstring). Set by the pass before it traces
         (:meth:`start`)."""
         self.ratio: Any = None
@@ -110,8 +111,8 @@ class PassLevels:
 
     def start(self, pixel: Any) -> None:
         """Point the kernels at a camera path of a pixel with ratios ``pixel`` (``view``,
-        the levels' ``sun_air``, ``sun_surface``, ``bounce``; None: no scaling), its camera
-        segment first."""
+        the levels' ``sun_air``, ``sun_surface``, ``bounce``, the levels' ``sun_bounce``;
+        None: no scaling), its camera segment first."""
         self.pixel = pixel
         self.ratio = None if pixel is None else (pixel[0], pixel[1])
 
@@ -119,9 +120,12 @@ class PassLevels:
         """Point the kernels at the path's next segment: the camera's where ``first``, else
         one that leaves a surface (module docstring)."""
         if self.pixel is not None:
-            view, sun_air, surface, bounce = self.pixel
+            view, sun_air, _, bounce, sun_bounce = self.pixel
             select = self.ops.select
-            self.ratio = (select(first, view, bounce), [select(first, s, surface) for s in sun_air])
+            self.ratio = (
+                select(first, view, bounce),
+                [select(first, a, b) for a, b in zip(sun_air, sun_bounce, strict=True)],
+            )
 
     # -- where the medium is along a ray ----------------------------------------------------
     def segment(self, p: Any, d: Any, t_end: Any = None) -> tuple[Any, Any]:

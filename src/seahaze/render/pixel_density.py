@@ -26,6 +26,12 @@ integrals of the field, :class:`PixelRatios`):
 ``bounce``
     The later segments' ratio: on the sea, that of the camera ray mirrored in a flat sea (where
     the light the sea reflects comes from); on a vessel, ``sun_surface``.
+``sun_bounce`` (one per level)
+    How much the haze above the later segments shades them from the sun: on the sea, the
+    ``sun_air`` ratio of the mirrored ray (its points weighted by the light each scatters
+    toward the sea point); on a vessel, ``sun_surface``. A sea under thin haze that mirrors a
+    bank sees the bank lit by the sun through the bank, not through the thin column above
+    the sea point.
 
 What the scaled profile still misses is where along a ray the haze lies and how the diffuse
 field answers the haze around each point: the tables are the profile's. docs/physics.md ("Haze
@@ -83,10 +89,14 @@ class PixelRatios:
     """(H, W)."""
     bounce: np.ndarray
     """(H, W)."""
+    sun_bounce: np.ndarray
+    """(L, H, W): one per level."""
 
     def levels(self, part: slice) -> PixelRatios:
         """The ratios of the levels ``part`` of those they were computed for."""
-        return PixelRatios(self.view, self.sun_air[part], self.sun_surface, self.bounce)
+        return PixelRatios(
+            self.view, self.sun_air[part], self.sun_surface, self.bounce, self.sun_bounce[part]
+        )
 
 
 def pixel_ratios(
@@ -103,7 +113,8 @@ def pixel_ratios(
     view = pixel_density_ratio(medium, geometry)
     sigma = np.asarray(sigma, np.float64)
     if sun_direction[2] <= 0.0:  # a sun below the horizon lights no haze: no depth to scale
-        return PixelRatios(view, np.stack([view] * len(sigma)), view, view)
+        per_level = np.stack([view] * len(sigma))
+        return PixelRatios(view, per_level, view, view, per_level)
     height, width = view.shape
     step = max(1, math.ceil(math.sqrt(height * width / SUN_GRID_PIXELS)))
     rows, cols = np.arange(0, height, step), np.arange(0, width, step)
@@ -112,42 +123,59 @@ def pixel_ratios(
     dist = np.minimum(dist_m, RAY_REACH_M)
     origin = geometry.origin.astype(np.float64)
     surface = origin + dist[..., None] * dirs
-    # Along the ray, up to AIR_REACH_M or its surface: cells growing quadratically.
-    reach = np.minimum(dist, AIR_REACH_M)[..., None]
-    edges = (np.arange(AIR_POINTS + 1) / AIR_POINTS) ** 2
-    s = 0.5 * (edges[:-1] + edges[1:]) * reach
-    width_m = np.diff(edges) * reach
-    air = origin + s[..., None] * dirs[..., None, :]
-    points = np.concatenate([air.reshape(-1, 3), surface.reshape(-1, 3)])
-    field_depth, profile_depth = sun_depths(medium, points, sun_direction)
-    n_air = air.shape[0] * air.shape[1] * AIR_POINTS
-    shape = air.shape[:-1]
-    rho = medium.density_at(air[..., 0], air[..., 1], air[..., 2])
-    sun_air = np.stack(
-        [
-            level_sun_ratio(
-                k,
-                rho * width_m,
-                field_depth[:n_air].reshape(shape),
-                profile_depth[:n_air].reshape(shape),
-            )
-            for k in sigma
-        ]
-    )
-    sun_surface = _ratio(field_depth[n_air:], profile_depth[n_air:]).reshape(dist.shape)
+    field_depth, profile_depth = sun_depths(medium, surface.reshape(-1, 3), sun_direction)
+    sun_surface = _ratio(field_depth, profile_depth).reshape(dist.shape)
     sky = ~np.isfinite(dist_m)
     sun_surface = np.where(sky, view[rows][:, cols], sun_surface)
+    # Along the ray, up to AIR_REACH_M or its surface.
+    reach = np.minimum(dist, AIR_REACH_M)
+    sun_air = air_sun_ratios(medium, origin, dirs, reach, sun_direction, sigma)
     if sea is None:
         sea = np.isfinite(geometry.distance_m) & (geometry.instance < 0)
     on_sea = sea[rows][:, cols]
     bounce = sun_surface.copy()
+    sun_bounce = np.stack([sun_surface] * len(sigma))
     if on_sea.any():
         bounce[on_sea] = mirror_ratio(medium, surface[on_sea], dirs[on_sea])
+        up = dirs[on_sea] * np.array([1.0, 1.0, -1.0])
+        mirrored = np.minimum(mirror_reach(medium, surface[on_sea], up), AIR_REACH_M)
+        sun_bounce[:, on_sea] = air_sun_ratios(
+            medium, surface[on_sea], up, mirrored, sun_direction, sigma
+        )
 
     def spread(grid: np.ndarray) -> np.ndarray:
         return np.repeat(np.repeat(grid, step, -2), step, -1)[..., :height, :width]
 
-    return PixelRatios(view, spread(sun_air), spread(sun_surface), spread(bounce))
+    return PixelRatios(
+        view, spread(sun_air), spread(sun_surface), spread(bounce), spread(sun_bounce)
+    )
+
+
+def air_sun_ratios(
+    medium: NonUniformHaze,
+    origins: np.ndarray,
+    dirs: np.ndarray,
+    reach: np.ndarray,
+    sun_direction: np.ndarray,
+    sigma: np.ndarray,
+) -> np.ndarray:
+    """(L, ...) each level's sun ratio (:func:`level_sun_ratio`) of the rays from ``origins``
+    ((..., 3), or one (3,) for all) along unit ``dirs`` (..., 3) over ``reach`` (...) metres,
+    at :data:`AIR_POINTS` points: midpoints of cells growing quadratically from the origin."""
+    edges = (np.arange(AIR_POINTS + 1) / AIR_POINTS) ** 2
+    s = 0.5 * (edges[:-1] + edges[1:]) * reach[..., None]
+    width_m = np.diff(edges) * reach[..., None]
+    start = origins if origins.ndim == 1 else origins[..., None, :]
+    air = start + s[..., None] * dirs[..., None, :]
+    field_depth, profile_depth = sun_depths(medium, air.reshape(-1, 3), sun_direction)
+    shape = air.shape[:-1]
+    mass = medium.density_at(air[..., 0], air[..., 1], air[..., 2]) * width_m
+    return np.stack(
+        [
+            level_sun_ratio(k, mass, field_depth.reshape(shape), profile_depth.reshape(shape))
+            for k in sigma
+        ]
+    )
 
 
 def level_sun_ratio(
@@ -191,11 +219,17 @@ def mirror_ratio(medium: NonUniformHaze, points: np.ndarray, dirs: np.ndarray) -
     camera travels, up to the medium's top or :data:`RAY_REACH_M`."""
     profile = medium.profile
     up = dirs * np.array([1.0, 1.0, -1.0])
-    climb = np.maximum(up[:, 2], 1e-9)
-    length = np.minimum(np.maximum(profile.top - points[:, 2], 0.0) / climb, RAY_REACH_M)
+    length = mirror_reach(medium, points, up)
     _, profile_length = profile.reduced_length(points[:, 2], up[:, 2], length, NUMPY)
     field_length = medium.lengths_along(points, up, np.zeros(len(points)), length)
     return _ratio(field_length, np.asarray(profile_length, np.float64))
+
+
+def mirror_reach(medium: NonUniformHaze, points: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """How far (m) the mirrored rays from ``points`` (N, 3) along ``up`` (N, 3) run in the
+    haze: to the medium's top, at most :data:`RAY_REACH_M`."""
+    climb = np.maximum(up[:, 2], 1e-9)
+    return np.minimum(np.maximum(medium.profile.top - points[:, 2], 0.0) / climb, RAY_REACH_M)
 
 
 def _ratio(field: np.ndarray, profile: np.ndarray) -> np.ndarray:
@@ -259,14 +293,15 @@ class PixelRatio:
             owned(r) for r in (ratios.view, ratios.sun_surface, ratios.bounce)
         )
         self.sun_air = [owned(r) for r in ratios.sun_air]
+        self.sun_bounce = [owned(r) for r in ratios.sun_bounce]
         self.width = dr.opaque(mi.UInt32, width)
         self.last_x = dr.opaque(mi.Float, width - 1)
         self.last_y = dr.opaque(mi.Float, height - 1)
 
-    def at(self, ray: Any, active: Any) -> tuple[Any, list, Any, Any]:
+    def at(self, ray: Any, active: Any) -> tuple[Any, list, Any, Any, list]:
         """The ``view`` ratio, the levels' ``sun_air`` ratios, the ``sun_surface`` and the
-        ``bounce`` ratio of the pixel camera ray ``ray`` leaves through (a Float per lane
-        each; 1 where inactive)."""
+        ``bounce`` ratio and the levels' ``sun_bounce`` ratios of the pixel camera ray ``ray``
+        leaves through (a Float per lane each; 1 where inactive)."""
         import drjit as dr
         import mitsuba as mi
 
@@ -286,4 +321,5 @@ class PixelRatio:
             [read(a) for a in self.sun_air],
             read(self.surface),
             read(self.bounce),
+            [read(a) for a in self.sun_bounce],
         )
