@@ -91,37 +91,34 @@ def fmt(value: float | None) -> str:
     return "—" if value is None else f"{value:.2f}"
 
 
-def group(score: realism.GroupScore) -> dict:
-    return {"vessels": score.vessels, "recall": score.recall, "ap50": score.ap50}
+def all_and_large(vessels, found, in_group) -> dict:
+    """The scores of a group's vessels (``in_group``) and of those ≥ 16 px high among them."""
+
+    def large(v: realism.Vessel) -> bool:
+        return in_group(v) and v.height_px >= DETECTABLE_PX
+
+    return {
+        "all": dataclasses.asdict(realism.score_group(vessels, found, in_group)),
+        "large": dataclasses.asdict(realism.score_group(vessels, found, large)),
+    }
 
 
 def scores(by_level: dict) -> dict:
     """Every figure of the tables, from each level's vessels and detections."""
     vessels, found = by_level["clean"]
     confused = realism.confusion(vessels, found)
-    classes = {}
-    for cls in sorted({v.cls for v in vessels}):
-        taken = confused.get(cls, Counter())
-        classes[cls] = {
-            "all": group(realism.score_group(vessels, found, lambda v, c=cls: v.cls == c)),
-            "large": group(
-                realism.score_group(
-                    vessels, found, lambda v, c=cls: v.cls == c and v.height_px >= DETECTABLE_PX
-                )
-            ),
-            "read_as": dict(taken.most_common()),
+    classes = {
+        cls: {
+            **all_and_large(vessels, found, lambda v, c=cls: v.cls == c),
+            "read_as": dict(confused.get(cls, Counter()).most_common()),
         }
+        for cls in sorted({v.cls for v in vessels})
+    }
     bands = {
-        name: group(realism.score_group(vessels, found, lambda v, b=name: v.band == b))
+        name: dataclasses.asdict(realism.score_group(vessels, found, lambda v, b=name: v.band == b))
         for name, _, _ in realism.HEIGHT_BANDS
     }
-    levels = {
-        level: {
-            "all": group(realism.score_group(v, f, lambda _: True)),
-            "large": group(realism.score_group(v, f, lambda x: x.height_px >= DETECTABLE_PX)),
-        }
-        for level, (v, f) in by_level.items()
-    }
+    levels = {level: all_and_large(v, f, lambda _: True) for level, (v, f) in by_level.items()}
     return {"classes": classes, "bands": bands, "levels": levels}
 
 
