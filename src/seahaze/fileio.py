@@ -3,7 +3,8 @@
 A file is written under a temporary name beside its target and renamed onto it when complete,
 so an interrupted or failed write never leaves a truncated file under the final name (and the
 temporary file is removed). Nothing written carries a timestamp: the same data give the same
-bytes. EXR files hold linear radiance (or distance) unscaled, float32, ZIP-compressed.
+bytes. EXR files hold linear radiance (or distance) unscaled, float32: maps that vary smoothly
+(distance, transmittance) ZIP-compressed, radiance uncompressed (below).
 """
 
 from __future__ import annotations
@@ -36,20 +37,31 @@ def atomic_target(path: Path) -> Iterator[Path]:
         tmp.unlink(missing_ok=True)
 
 
+PNG_COMPRESS_LEVEL = 4
+"""zlib level of the PNGs. Pillow's default, 6, spends about 2.7 times as long for files about
+2 % smaller: rendered images carry grain that deflate's longer searches barely shrink
+(docs/benchmarks.md, "What do a scene's files cost to write?")."""
+
+
 def write_png(path: str | Path, image8: np.ndarray) -> None:
-    """Write an 8-bit RGB PNG atomically (temporary file, then rename)."""
+    """Write an 8-bit RGB PNG atomically (temporary file, then rename), zlib level
+    :data:`PNG_COMPRESS_LEVEL`."""
     from PIL import Image
 
     with atomic_target(Path(path)) as tmp:
-        Image.fromarray(image8, mode="RGB").save(tmp, format="PNG")
+        Image.fromarray(image8, mode="RGB").save(
+            tmp, format="PNG", compress_level=PNG_COMPRESS_LEVEL
+        )
 
 
-def write_exr(path: str | Path, channels: dict[str, np.ndarray]) -> None:
-    """Write float32 channels (each (H, W)) to an OpenEXR file atomically, ZIP-compressed."""
+def write_exr(path: str | Path, channels: dict[str, np.ndarray], compress: bool = True) -> None:
+    """Write float32 channels (each (H, W)) to an OpenEXR file atomically, ZIP-compressed, or
+    uncompressed with ``compress=False``."""
     import OpenEXR
 
     _use_exr_threads(OpenEXR)
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    compression = OpenEXR.ZIP_COMPRESSION if compress else OpenEXR.NO_COMPRESSION
+    header = {"compression": compression, "type": OpenEXR.scanlineimage}
     data = {
         name: np.ascontiguousarray(values, dtype=np.float32) for name, values in channels.items()
     }
@@ -85,8 +97,14 @@ def _exr_write_error(path: Path, err: RuntimeError) -> OSError:
 
 
 def write_rgb_exr(path: str | Path, radiance: np.ndarray) -> None:
-    """Linear RGB radiance (H, W, 3) as an EXR with channels R, G, B."""
-    write_exr(path, {"R": radiance[..., 0], "G": radiance[..., 1], "B": radiance[..., 2]})
+    """Linear RGB radiance (H, W, 3) as an uncompressed EXR with channels R, G, B.
+
+    A rendered radiance's low mantissa bits are Monte Carlo noise, which no lossless coder
+    shrinks: ZIP made these files about a tenth smaller at about fourteen times the time of
+    writing them uncompressed (docs/benchmarks.md, "What do a scene's files cost to write?").
+    """
+    channels = {"R": radiance[..., 0], "G": radiance[..., 1], "B": radiance[..., 2]}
+    write_exr(path, channels, compress=False)
 
 
 def read_exr(path: str | Path) -> dict[str, np.ndarray]:

@@ -30,8 +30,8 @@ def write_scene(layout: Layout, scene: SceneRender) -> None:
     """Write every file of ``scene`` (see :meth:`Layout.scene_files`), each atomically.
 
     The images are encoded and written by a few threads (PNG and EXR compression release the
-    GIL): at 1280×720 the 12 images' files took 9 s on one thread, a tenth of the render. The
-    bytes do not depend on the order; the first failure is raised once all writes ended.
+    GIL; what each file costs: docs/benchmarks.md, "What do a scene's files cost to write?").
+    The bytes do not depend on the order; the first failure is raised once all writes ended.
     """
     name = scene.name
     images = [(CLEAN_LEVEL, scene.clean_image, scene.clean)]
