@@ -2,7 +2,7 @@
 
 Each configuration runs ``seahaze render scenes/default.yaml --scenes N`` as a fresh process into
 an empty temporary folder (clean image + the 11 graded levels, `physical` mode in one pass, the
-scene's 32 spp), so the wall time includes start-up, geometry, kernel compilation and every
+scene's own spp), so the wall time includes start-up, geometry, kernel compilation and every
 write. Throughput is
 scenes / wall time; the per-scene time is the median of the JSON-lines log's ``scene_done``
 seconds. The MSVD projection divides 1026 scenes (12,312 images = 1026 × (clean + 11 levels))
@@ -76,11 +76,15 @@ def _res(res: str) -> str:
 def write_section(rows: list[dict]) -> None:
     """Write the batch table and the MSVD projection into docs/benchmarks.md."""
     cores = len(os.sched_getaffinity(0))
+    from seahaze.sceneio import load_scene
+
+    spp = load_scene(SCENE)[0].render.spp
     lines = [
-        "## Dataset batches, default scene (clean + 11 levels, `physical`, 32 spp)",
+        f"## Dataset batches, default scene (clean + 11 levels, `physical`, {spp} spp)",
         "",
-        f"Machine: {platform.machine()}, {cores} vCPU, shared with other work (1-minute load "
-        "average before and after each run in the table); variant `llvm_ad_rgb`. Each row is "
+        f"Machine: {platform.machine()}, {cores} vCPU (1-minute load average before and after "
+        "each run in the table, the benchmark's own renders included); variant `llvm_ad_rgb`. "
+        "Each row is "
         "one fresh `seahaze render scenes/default.yaml --scenes N --workers K` into an empty "
         "folder: wall time includes start-up, geometry, kernel compilation and all writes. "
         "`--workers K` gives each worker cores/K drjit threads.",
@@ -117,10 +121,12 @@ def write_section(rows: list[dict]) -> None:
                 "and workers only interleave"
             )
         text += "."
-    if max(max(r["load_before"], r["load_after"]) for r in rows) > cores:
+    # Every later row's load includes the renders of the row before it: only the first row's
+    # starting load tells of other work on the machine.
+    if rows[0]["load_before"] > 0.5 * cores:
         text += (
-            " Other work kept the machine busy (load above its vCPU count), so these rates are "
-            "pessimistic."
+            " Other work was running when the benchmark started (load "
+            f"{rows[0]['load_before']:.1f} on {cores} vCPUs), so these rates are pessimistic."
         )
     text += (
         " Scenes are independent, so the time divides by the number of such machines on a Dask "
