@@ -9,97 +9,90 @@ against each target's own reduced length ``ℓ = ∫ρ ds``: :mod:`~seahaze.veri
 measured visibility ``V = −ln(ε) / σ`` is compared with the label (:mod:`~seahaze.verify.run`)
 and reported (:mod:`~seahaze.verify.report`). docs/physics.md ("Verifying visibility") explains
 the choices and the target-size effect.
+
+The names below are loaded when first asked for (PEP 562): importing the package, or its light
+:mod:`~seahaze.verify.defaults`, does not build the calibration scene's machinery (the world, the
+vessels, trimesh), which the ``seahaze`` command's other subcommands would otherwise import at
+start-up for their help text.
 """
 
-from ..visibility import visibility_from_extinction
-from .field import (
-    DENSE_RATIO,
-    THIN_RATIO,
-    calibration_medium,
-    coverage,
-    coverage_note,
-)
-from .fit import (
-    Contrasts,
-    Fit,
-    RayLengths,
-    fit_extinction,
-    jackknife_visibility,
-    measure_contrasts,
-)
-from .report import format_report, plot_contrasts, write_outputs, write_strips
-from .run import (
-    DEFAULT_BATCHES,
-    DEFAULT_RESOLUTION,
-    DEFAULT_SPP,
-    DEFAULT_TOLERANCE,
-    DEFAULT_VISIBILITY_M,
-    LevelMeasurement,
-    LevelReport,
-    TargetReport,
-    VerifyReport,
-    VerifySettings,
-    analyse_level,
-    render_level_batches,
-    run_verify,
-)
-from .targets import (
-    FOV_DEG,
-    N_TARGETS,
-    TARGET_TOP_DEG,
-    TARGET_WIDTH_DEG,
-    Target,
-    VerifyInputError,
-    calibration_spec,
-    horizon_row,
-    layout_targets,
-    min_resolution,
-    sky_pixels,
-    target_fractions,
-    target_pixels,
-)
+from __future__ import annotations
 
-__all__ = [
-    "DEFAULT_BATCHES",
-    "DEFAULT_RESOLUTION",
-    "DEFAULT_SPP",
-    "DEFAULT_TOLERANCE",
-    "DEFAULT_VISIBILITY_M",
-    "DENSE_RATIO",
-    "FOV_DEG",
-    "N_TARGETS",
-    "TARGET_TOP_DEG",
-    "TARGET_WIDTH_DEG",
-    "THIN_RATIO",
-    "Contrasts",
-    "Fit",
-    "LevelMeasurement",
-    "LevelReport",
-    "RayLengths",
-    "Target",
-    "TargetReport",
-    "VerifyInputError",
-    "VerifyReport",
-    "VerifySettings",
-    "analyse_level",
-    "calibration_medium",
-    "calibration_spec",
-    "coverage",
-    "coverage_note",
-    "fit_extinction",
-    "format_report",
-    "horizon_row",
-    "jackknife_visibility",
-    "layout_targets",
-    "measure_contrasts",
-    "min_resolution",
-    "plot_contrasts",
-    "render_level_batches",
-    "run_verify",
-    "sky_pixels",
-    "target_fractions",
-    "target_pixels",
-    "visibility_from_extinction",
-    "write_outputs",
-    "write_strips",
-]
+import importlib
+from typing import Any
+
+_SOURCES: dict[str, tuple[str, ...]] = {
+    ".defaults": (
+        "DEFAULT_BATCHES",
+        "DEFAULT_RESOLUTION",
+        "DEFAULT_SPP",
+        "DEFAULT_TOLERANCE",
+        "DEFAULT_VISIBILITY_M",
+        "TARGET_WIDTH_DEG",
+    ),
+    ".field": (
+        "DENSE_RATIO",
+        "THIN_RATIO",
+        "calibration_medium",
+        "coverage",
+        "coverage_note",
+    ),
+    ".fit": (
+        "Contrasts",
+        "Fit",
+        "RayLengths",
+        "fit_extinction",
+        "jackknife_visibility",
+        "measure_contrasts",
+    ),
+    ".report": (
+        "format_report",
+        "plot_contrasts",
+        "write_outputs",
+        "write_strips",
+    ),
+    ".run": (
+        "LevelMeasurement",
+        "LevelReport",
+        "TargetReport",
+        "VerifyReport",
+        "VerifySettings",
+        "analyse_level",
+        "render_level_batches",
+        "run_verify",
+    ),
+    ".targets": (
+        "FOV_DEG",
+        "N_TARGETS",
+        "TARGET_TOP_DEG",
+        "Target",
+        "VerifyInputError",
+        "calibration_spec",
+        "horizon_row",
+        "layout_targets",
+        "min_resolution",
+        "sky_pixels",
+        "target_fractions",
+        "target_pixels",
+    ),
+    "..visibility": ("visibility_from_extinction",),
+}
+"""Each submodule (relative to this package) and the names it provides."""
+
+_WHERE = {name: module for module, names in _SOURCES.items() for name in names}
+
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str) -> Any:
+    """``seahaze.verify.NAME``: the name from its submodule, imported on first use."""
+    module = _WHERE.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_WHERE))

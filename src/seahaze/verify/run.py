@@ -27,6 +27,13 @@ from ..visibility import (
     level_name,
 )
 from ..world import SceneGeometry, Sea, build_sea
+from .defaults import (
+    DEFAULT_BATCHES,
+    DEFAULT_RESOLUTION,
+    DEFAULT_SPP,
+    DEFAULT_TOLERANCE,
+    TARGET_WIDTH_DEG,
+)
 from .field import (
     calibration_medium,
     coverage,
@@ -42,11 +49,9 @@ from .fit import (
     visibility_or_nan,
 )
 from .targets import (
-    DEFAULT_RESOLUTION,
     FOV_DEG,
     N_TARGETS,
     TARGET_TOP_DEG,
-    TARGET_WIDTH_DEG,
     Target,
     VerifyInputError,
     calibration_spec,
@@ -57,13 +62,6 @@ from .targets import (
     target_pixels,
 )
 
-# Defaults measured on a 2-vCPU machine (docs/physics.md, "Verifying visibility"): 4096 spp give
-# a standard error of 0.9 % on V = 1000 m in about two minutes, so 5 % holds the thin targets'
-# bias (+1-2 %) plus more than 3 standard errors.
-DEFAULT_VISIBILITY_M = 1000.0
-DEFAULT_SPP = 4096
-DEFAULT_BATCHES = 16
-DEFAULT_TOLERANCE = 0.05
 FIELD_SEEN = (
     "the base scene's patches and bank at its first frame, normalised over its own view "
     "(seahaze.verify.field)"

@@ -38,6 +38,7 @@ from ..scene_medium import haze_medium
 from ..spec import OverrideError, SceneSpec, VesselsSpec, with_changes
 from ..visibility import extinction_coefficient
 from ..world import MeshData, VesselInstance
+from .defaults import DEFAULT_RESOLUTION, TARGET_WIDTH_DEG
 
 FOV_DEG = 24.0
 """Horizontal field of view of the calibration camera."""
@@ -47,8 +48,6 @@ N_TARGETS = 12
 """Targets per level."""
 NEAR_FRACTION, FAR_FRACTION = 0.05, 1.5
 """Nearest and farthest target distance, as a fraction of the level's visibility."""
-TARGET_WIDTH_DEG = 0.2
-"""Angular width of every target at the camera (physically thin: see docs/physics.md)."""
 TARGET_TOP_DEG = 0.5
 """Angular height of every target's top above the horizon."""
 TARGET_BOTTOM_M = -1.0
@@ -57,8 +56,6 @@ SIDE_GAP_PX = 1
 """Sky columns skipped between a target's partly covered columns and its side bands."""
 COVER_MARGIN_PX = 0.02
 """A pixel counts as fully covered when the target edge is at least this far outside it."""
-DEFAULT_RESOLUTION = (512, 13)
-"""Size of the calibration view: 12 targets of 2+ px across 24°, and the horizon rows."""
 SKY_MIN_OPTICAL_DEPTH = 5.0
 """Below this optical depth along the sky rays beside the targets, clear sky shows through the
 top of the haze layer and the horizon is no longer the haze's own airlight (a note is printed)."""
