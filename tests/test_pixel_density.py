@@ -99,7 +99,8 @@ def test_a_camera_ray_reads_the_ratio_of_its_own_pixel():
     # +1: a ratio of 0 would be clamped; the ratios told apart by their offsets.
     suns = np.stack([index + 2.0, index + 3.0])
     bounced = np.stack([index + 6.0, index + 7.0])
-    lookup = PixelRatio(sensor, PixelRatios(index + 1.0, suns, index + 4.0, index + 5.0, bounced))
+    diffuse = np.stack([index + 8.0, index + 9.0])
+    ratios = PixelRatios(index + 1.0, suns, index + 4.0, index + 5.0, bounced, diffuse, diffuse + 2)
     rng = np.random.default_rng(2)
     pixel = rng.integers(0, height * width, 4000)
     # Anywhere inside the pixel, its corners excepted (a float32 step from the next one).
@@ -108,11 +109,17 @@ def test_a_camera_ray_reads_the_ratio_of_its_own_pixel():
     y = (pixel // width + jitter[1]) / height
     film = mi.Point2f(mi.Float(x), mi.Float(y))
     ray, _ = sensor.sample_ray(0.0, 0.5, film, mi.Point2f(0.5, 0.5))
-    view, (sun_0, sun_1), surface, bounce, (sun_b0, sun_b1) = lookup.at(ray, mi.Bool(True))
-    got = [np.asarray(r, np.float64) for r in (view, sun_0, sun_1, surface, bounce, sun_b0, sun_b1)]
+    view, sun_air, surface, bounce, sun_bounce, air, later = PixelRatio(sensor, ratios).at(
+        ray, mi.Bool(True)
+    )
+    read = [view, *sun_air, surface, bounce, *sun_bounce, *air, *later]
+    got = [np.asarray(r, np.float64) for r in read]
     for offset, ratio in enumerate(got, start=1):
         np.testing.assert_array_equal(ratio - offset, pixel)
     assert dr.width(ray.d) == pixel.size
+    # Without diffuse ratios, none are read.
+    plain = PixelRatio(sensor, PixelRatios(index + 1.0, suns, index + 4.0, index + 5.0, bounced))
+    assert plain.at(ray, mi.Bool(True))[5:] == (None, None)
 
 
 def _renderer(medium, settings=None):
@@ -156,6 +163,47 @@ def test_a_field_of_ratio_one_renders_what_the_slab_renders():
     slab = _renderer(SLAB).render([sigma], 0.998, 0.75, 4, 9)
     np.testing.assert_array_equal(field.clean, slab.clean)
     assert abs(field.levels[0].mean() / slab.levels[0].mean() - 1.0) < 0.01
+
+
+def test_the_diffuse_ratios_scale_the_diffuse_field_of_their_own_segments():
+    """A level is linear in its diffuse field: with the same random numbers, the camera
+    segment's ``diffuse_air`` ratio at 0, 1 and 2 gives levels in arithmetic progression, and
+    a ratio of 1 renders what no ratio renders, bit for bit. ``diffuse_bounce`` scales only
+    the segments after a surface: pixels of open sky (no surface on any path) do not see it,
+    the sea does. (The vessel-light pass, which reads them too, is left out: it corrects
+    every pixel near a vessel, open sky included.)"""
+    import dataclasses
+
+    from seahaze.render.estimator import EstimatorSettings
+
+    sigma = 3.912 / 800.0
+    settings = EstimatorSettings(vessel_light_share=0.0)
+    renderer = _renderer(NonUniformHaze(SLAB, HazeField(), 1.0), settings)
+    plain = renderer.render([sigma], 0.998, 0.75, 4, 9).levels[0]
+    own_ratios = renderer.pixel_ratios
+
+    def render_with(air: float, later: float) -> np.ndarray:
+        def ratios(levels):
+            base = own_ratios(levels)
+            ones = np.ones_like(base.sun_air)
+            return dataclasses.replace(base, diffuse_air=air * ones, diffuse_bounce=later * ones)
+
+        renderer.pixel_ratios = ratios
+        return renderer.render([sigma], 0.998, 0.75, 4, 9).levels[0]
+
+    once, none, twice = (render_with(air, 1.0) for air in (1.0, 0.0, 2.0))
+    np.testing.assert_array_equal(once, plain)
+    diffuse = once - none
+    np.testing.assert_allclose(twice - once, diffuse, rtol=1e-4, atol=1e-6)
+    assert diffuse.mean() > 0.05 * once.mean()  # the haze's diffuse light is no trace
+    dark_sea = render_with(1.0, 0.0)
+    distance = renderer.geometry.distance_m
+    open_sky = np.isinf(distance)
+    open_sky[1:] &= open_sky[:-1]
+    open_sky[:-1] &= open_sky[1:]  # rows whose neighbours are sky too
+    np.testing.assert_array_equal(dark_sea[open_sky], once[open_sky])
+    sea = np.isfinite(distance) & (renderer.geometry.instance < 0)
+    assert np.all(dark_sea[sea].mean(0) < once[sea].mean(0))
 
 
 def test_a_levels_sun_ratio_gives_the_fields_mean_transmittance_toward_the_sun():

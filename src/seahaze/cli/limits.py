@@ -103,9 +103,10 @@ them as each pixel's equivalent profile, every region within 3.4 % of the ``refe
 (+7 … +14 %) where dense patches shield their own inside (docs/physics.md, "Haze that varies
 across the sea in the physical mode")."""
 UNVALIDATED_WITH_BANK = ("physical",)
-"""Modes not validated at any level in a fog bank (``haze.bank``): ``physical``'s equivalent
-profile spreads a ray's haze evenly along it, where a bank puts it all beyond the edge (sea
-+4 … +6 %, sky −2 … −6 % at 1000–4000 m; −14 … −20 % at 300 m)."""
+"""Modes not validated at any level in a fog bank (``haze.bank``): ``physical`` reads a bank's
+diffuse light from tables of a horizontally homogeneous haze, where the bank's near side lets
+the horizon's light reach its face (sky −2 … −6 % at 1000–4000 m; −13 … −19 % at 300 m;
+docs/physics.md, "Haze that varies across the sea in the physical mode")."""
 
 # measured by scripts/measure_estimates.py (docs/limits.md, "The estimate"); bytes, wall seconds
 BASE_BYTES = {"physical": 6.34e08, "reference": 5.03e08, "asm": 4.68e08}

@@ -138,8 +138,15 @@ def bank_modulation(bank: Bank, x: Any, y: Any) -> Any:
     """:meth:`seahaze.haze_field.Bank.modulation` in the kernel."""
     az = math.radians(bank.toward_deg)
     s = (x - bank.origin_xy[0]) * math.cos(az) + (y - bank.origin_xy[1]) * math.sin(az)
-    step = 0.5 * (1.0 + dr.tanh((s - bank.distance_m) * (0.5 / bank.edge_m)))
-    return bank.near_ratio + (1.0 - bank.near_ratio) * step
+    return bank_step(s - bank.distance_m, 0.5 / bank.edge_m, bank.near_ratio)
+
+
+def bank_step(beyond: Any, half_inverse_edge: Any, near_ratio: Any) -> Any:
+    """A bank's ``m`` at ``beyond`` metres past its edge (negative: on the camera's side):
+    ``r + (1 − r)·L``, the logistic ``L`` written with ``tanh``; its width and ``r`` may be
+    Python numbers or kernel parameters."""
+    step = 0.5 * (1.0 + dr.tanh(beyond * half_inverse_edge))
+    return near_ratio + (1.0 - near_ratio) * step
 
 
 def field_modulation(field: HazeField, p: Any, travelled: Any, seed: Any = None) -> Any:

@@ -70,6 +70,7 @@ from . import glint_lobe, jit_haze
 from .estimator import EstimatorSettings
 from .haze_path import HazePath
 from .pass_levels import PassLevels
+from .pixel_density import SMALLEST_RATIO
 from .sun_disk import disk_irradiance, sun_axis, sun_cone_cos
 
 if mi.variant() is None:
@@ -151,15 +152,19 @@ class HazeIntegrator(mi.SamplingIntegrator):
         self.glint = glint_lobe.GlintLobe(sun_axis(sun), wind_speed, settings.glint_share, shining)
         self.levels = PassLevels(medium, n_levels, grey)
         self.pixel_ratio: Any = None
+        self.segments: Any = None
         # A parameter: another count reuses the kernel.
         self.camera_points = dr.opaque(mi.UInt32, settings.camera_points)
 
-    def set_pixel_ratio(self, pixel_ratio: Any) -> None:
+    def set_pixel_ratio(self, pixel_ratio: Any, segments: Any = None) -> None:
         """Render each pixel's equivalent profile (:mod:`seahaze.render.pixel_density`):
         ``pixel_ratio`` is a :class:`~seahaze.render.pixel_density.PixelRatio` of the frame,
         or None for haze that varies with height alone. The medium is then the field's
-        vertical profile."""
+        vertical profile. ``segments``: a
+        :class:`~seahaze.render.segment_ratio.BankSegments` that measures each later
+        segment's own ratio, or None (the pixel's ``bounce``)."""
         self.pixel_ratio = pixel_ratio
+        self.segments = None if pixel_ratio is None else segments
 
     @contextmanager
     def camera_path(self, ray: Any, active: Any) -> Iterator[None]:
@@ -219,8 +224,11 @@ class HazeIntegrator(mi.SamplingIntegrator):
         (:meth:`.GlintLobe.share_at`); ``sun``: the sun's emitter sample at the surface
         (direction, reduced depth toward it, each level's transmittance over that depth),
         whose direction lights the haze here too, so that the levels' transmittances toward
-        the sun are computed once."""
+        the sun are computed once. In haze that varies across the sea its segment sees the
+        column above the surface (:meth:`.PassLevels.follow_light`), where the sun's light
+        comes down, not the later segments' mirrored ray."""
         levels = self.levels
+        levels.follow_light()
         sun_d, sun_depth, sun_att = sun
         cos_t = jit_haze.hg_sample_cos(sampler.next_1d(active), levels.g)
         phi = 2.0 * dr.pi * sampler.next_1d(active)
@@ -277,7 +285,9 @@ class HazeIntegrator(mi.SamplingIntegrator):
             # Unshadowed sun: transmittance to the point and on to the sun are both
             # exponential in s, so their product integrates in closed form.
             frac = levels.sun_scattered(k, None, depth[k], climb[k], length)
-            source = sun * frac * sun_mis + (mass[k] * levels.inv_sg[k] * per_point) * diffuse[k]
+            scale = levels.diffuse_scale(k)
+            spread = diffuse[k] if scale is None else diffuse[k] * scale
+            source = sun * frac * sun_mis + (mass[k] * levels.inv_sg[k] * per_point) * spread
             res[k] += dr.select(active, att[k] * beta * source, 0.0)
         return SegmentSun(ray, active, enter, length, beta, sun_d, lit, sun, depth, climb)
 
@@ -326,9 +336,14 @@ class HazeIntegrator(mi.SamplingIntegrator):
         """Each level's transmittance over path ``p``'s segment up to ``t_end`` (not yet
         applied to ``p``) and the segment's unshadowed in-scattering, read at ``n_points``
         points, added to ``p``; returns both the transmittances and what the sun's part drew
-        (:meth:`inscatter`)."""
+        (:meth:`inscatter`). Where the pass measures later segments' own ratios through a
+        bank (:meth:`set_pixel_ratio`), this one's is measured here."""
         levels = self.levels
         levels.follow_segment(p.depth == 0)
+        if self.segments is not None:
+            u = sampler.next_1d(p.active)
+            own = self.segments.ratio(p.ray, t_end, u, levels.ratio[0])
+            levels.follow_own_ratio(p.depth == 0, dr.maximum(own, SMALLEST_RATIO))
         enter, length = levels.segment(p.ray.o, p.ray.d, t_end)
         segment = [levels.transmittance(k, length) for k in range(self.n_levels)]
         sun_mis = dr.select(p.prev_delta, 1.0, mis_weight(p.prev_pdf, self.aureole_pdf(p.ray.d)))

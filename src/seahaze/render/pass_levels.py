@@ -19,7 +19,9 @@ Along the camera segment reduced lengths and heights are the profile's times the
 ratio ``r`` (a reduced distance divided by it to find its point) and each level's depths
 toward the sun times its own ``sun_air`` ratio; along the later segments, which leave a
 surface, lengths are times the ``bounce`` ratio and depths toward the sun times each level's
-``sun_bounce``; the rays from a surface toward the lights are times ``sun_surface``. None,
+``sun_bounce``; the rays from a surface toward the lights and the aureole's segment are
+times ``sun_surface``; the diffuse field of a segment is times the pixel's ``diffuse_air``
+or ``diffuse_bounce`` ratio where it has them. None,
 as for every other haze, leaves the kernels exactly as they were: the per-level depths toward
 the sun are then one value.
 """
@@ -114,18 +116,28 @@ class PassLevels:
         the levels' ``sun_air``, ``sun_surface``, ``bounce``, the levels' ``sun_bounce``;
         None: no scaling), its camera segment first."""
         self.pixel = pixel
-        self.ratio = None if pixel is None else (pixel[0], pixel[1])
+        self.ratio = None if pixel is None else (pixel[0], pixel[1], pixel[5])
 
     def follow_segment(self, first: Any) -> None:
         """Point the kernels at the path's next segment: the camera's where ``first``, else
         one that leaves a surface (module docstring)."""
         if self.pixel is not None:
-            view, sun_air, _, bounce, sun_bounce = self.pixel
+            view, sun_air, _, bounce, sun_bounce, diffuse_air, diffuse_bounce = self.pixel
             select = self.ops.select
-            self.ratio = (
-                select(first, view, bounce),
-                [select(first, a, b) for a, b in zip(sun_air, sun_bounce, strict=True)],
-            )
+            pairs = lambda a, b: [select(first, x, y) for x, y in zip(a, b, strict=True)]  # noqa: E731
+            diffuse = None
+            if diffuse_air is not None:
+                diffuse = pairs(diffuse_air, diffuse_bounce)
+            self.ratio = (select(first, view, bounce), pairs(sun_air, sun_bounce), diffuse)
+
+    def follow_light(self) -> None:
+        """Point the kernels at a segment from a surface toward the sun's side of the sky
+        (the aureole's): where the pass renders pixels' equivalent profiles, through the
+        column above the pixel's surface (its ``sun_surface`` ratio, along it and toward the
+        sun)."""
+        if self.pixel is not None:
+            surface = self.pixel[2]
+            self.ratio = (surface, [surface] * self.n_levels, None)
 
     # -- where the medium is along a ray ----------------------------------------------------
     def segment(self, p: Any, d: Any, t_end: Any = None) -> tuple[Any, Any]:
@@ -139,6 +151,22 @@ class PassLevels:
         (its ``sun_surface`` ratio)."""
         enter, length = self.medium.reduced_length(p.z, d.z, None, self.ops)
         return enter, length if self.pixel is None else length * self.pixel[2]
+
+    def follow_own_ratio(self, first: Any, ratio: Any) -> None:
+        """Give a segment that leaves a surface (not ``first``) the ratio ``ratio`` measured
+        along it (:mod:`seahaze.render.segment_ratio`) instead of its pixel's ``bounce``;
+        call after :meth:`follow_segment`."""
+        if self.ratio is not None:
+            along, suns, diffuse = self.ratio
+            self.ratio = (self.ops.select(first, along, ratio), suns, diffuse)
+
+    def diffuse_scale(self, k: int) -> Any:
+        """Level ``k``'s factor on the diffuse field along the segment being followed: the
+        pixel's ``diffuse_air`` or ``diffuse_bounce`` ratio where the frame has them, else
+        None (the tables as they are)."""
+        if self.ratio is None or self.ratio[2] is None:
+            return None
+        return self.ratio[2][k]
 
     def transmittance(self, k: int, length: Any) -> Any:
         """Level ``k``'s transmittance over reduced length ``length``: a Float for grey
@@ -169,7 +197,7 @@ class PassLevels:
         each level its own sun ratio)."""
         if self.ratio is None:
             return [self.medium.depth_toward_sun(h, mu_sun, self.ops)] * self.n_levels
-        view, suns = self.ratio
+        view, suns, _ = self.ratio
         depth = self.medium.depth_toward_sun(h / view, mu_sun, self.ops)
         return [depth * sun for sun in suns]
 
@@ -180,7 +208,7 @@ class PassLevels:
         profiles."""
         if self.ratio is None:
             return [1.0 - dz / mu_sun] * self.n_levels
-        view, suns = self.ratio
+        view, suns, _ = self.ratio
         slope = dz / mu_sun / view
         return [1.0 - slope * sun for sun in suns]
 

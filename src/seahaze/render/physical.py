@@ -98,6 +98,12 @@ class PhysicalRenderer:
         self.medium = loaded.medium if self.field is None else self.field.profile
         self.pixel_ratio: PixelRatio | None = None
         self._ratios: dict[tuple, PixelRatios] = {}
+        # A bank alone: the segments after a surface measure their own ratio through it.
+        self.segments: Any = None
+        if self.field is not None:
+            from .segment_ratio import BankSegments  # a Mitsuba variant is set by now
+
+            self.segments = BankSegments(self.field) if BankSegments.suits(self.field) else None
         # The sun and the sky as separate emitters: the sun's single scattering is computed
         # per pixel with shadow rays, the sky's goes into the table.
         sun, sky = sun_and_sky_dicts(spec, loaded.elapsed_s)
@@ -271,6 +277,7 @@ class PhysicalRenderer:
         grey = bool(np.all(sigma == sigma[:, 1:2]))
         medium: HazeMedium = self.medium.with_optics(albedo, g)
         key = (kind, n, grey, medium.with_optics(0.0, 0.0), self.field is not None)
+        key += (self.segments is not None,)
         if key not in self.integrators:
             camera, vessel_light = integrator_classes()
             cls = {"camera": camera, "vessel_light": vessel_light}[kind]
@@ -278,7 +285,7 @@ class PhysicalRenderer:
                 self.sun, self.sky, medium, n, grey, self.wind_speed, self.settings
             )
         integrator = self.integrators[key]
-        integrator.set_pixel_ratio(self.pixel_ratio)
+        integrator.set_pixel_ratio(self.pixel_ratio, self.segments)
         integrator.levels.set(
             sigma, np.full(n, 1.0 / n), albedo, g, tables, self.sun_azimuth_rad, self.grid.folded
         )

@@ -33,6 +33,16 @@ integrals of the field, :class:`PixelRatios`):
     bank sees the bank lit by the sun through the bank, not through the thin column above
     the sea point.
 
+``diffuse_air`` and ``diffuse_bounce`` (one per level, optional)
+    Factors on the diffuse field (the tables' light) of the camera segment and of the later
+    segments: the field's diffuse in-scattering along the ray over the equivalent
+    profile's. :func:`pixel_ratios` leaves them None (the tables as they are); a caller that
+    knows the field's own diffuse light sets them (``scripts/bench_bank_diffuse.py`` traces
+    a bank's and measures what they would fix).
+
+The aureole a surface samples around the sun travels through the column above the surface
+(``sun_surface``), not along the later segments' ratios: its directions lie around the sun.
+
 What the scaled profile still misses is where along a ray the haze lies and how the diffuse
 field answers the haze around each point: the tables are the profile's. docs/physics.md ("Haze
 that varies across the sea in the physical mode") measures what that costs per region against
@@ -91,11 +101,23 @@ class PixelRatios:
     """(H, W)."""
     sun_bounce: np.ndarray
     """(L, H, W): one per level."""
+    diffuse_air: np.ndarray | None = None
+    """(L, H, W) or None: per level, the camera segment's diffuse in-scattering in the field
+    over that in the pixel's equivalent profile; None: 1."""
+    diffuse_bounce: np.ndarray | None = None
+    """(L, H, W) or None: the same along the later segments."""
 
     def levels(self, part: slice) -> PixelRatios:
         """The ratios of the levels ``part`` of those they were computed for."""
+        pick = lambda a: None if a is None else a[part]  # noqa: E731
         return PixelRatios(
-            self.view, self.sun_air[part], self.sun_surface, self.bounce, self.sun_bounce[part]
+            self.view,
+            self.sun_air[part],
+            self.sun_surface,
+            self.bounce,
+            self.sun_bounce[part],
+            pick(self.diffuse_air),
+            pick(self.diffuse_bounce),
         )
 
 
@@ -294,14 +316,19 @@ class PixelRatio:
         )
         self.sun_air = [owned(r) for r in ratios.sun_air]
         self.sun_bounce = [owned(r) for r in ratios.sun_bounce]
+        self.diffuse_air, self.diffuse_bounce = (
+            None if a is None else [owned_floats(r) for r in a]
+            for a in (ratios.diffuse_air, ratios.diffuse_bounce)
+        )
         self.width = dr.opaque(mi.UInt32, width)
         self.last_x = dr.opaque(mi.Float, width - 1)
         self.last_y = dr.opaque(mi.Float, height - 1)
 
-    def at(self, ray: Any, active: Any) -> tuple[Any, list, Any, Any, list]:
+    def at(self, ray: Any, active: Any) -> tuple:
         """The ``view`` ratio, the levels' ``sun_air`` ratios, the ``sun_surface`` and the
-        ``bounce`` ratio and the levels' ``sun_bounce`` ratios of the pixel camera ray ``ray``
-        leaves through (a Float per lane each; 1 where inactive)."""
+        ``bounce`` ratio, the levels' ``sun_bounce`` ratios and the levels' ``diffuse_air``
+        and ``diffuse_bounce`` ratios (None where the frame has none) of the pixel camera ray
+        ``ray`` leaves through (a Float per lane each; 1 where inactive)."""
         import drjit as dr
         import mitsuba as mi
 
@@ -322,4 +349,6 @@ class PixelRatio:
             read(self.surface),
             read(self.bounce),
             [read(a) for a in self.sun_bounce],
+            None if self.diffuse_air is None else [read(a) for a in self.diffuse_air],
+            None if self.diffuse_bounce is None else [read(a) for a in self.diffuse_bounce],
         )
