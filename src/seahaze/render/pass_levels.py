@@ -52,8 +52,9 @@ class PassLevels:
         self.medium, self.n_levels, self.grey = medium, n_levels, grey
         self.ops = drjit_ops()
         self.pixel: Any = None
-        """Per lane, the ``view``, per-level ``sun_air``, ``sun_surface``, ``bounce`` and
-        per-level ``sun_bounce`` density ratios of the camera path's pixel (drjit Floats), or
+        """Per lane, the ``view``, per-level ``sun_air``, ``sun_surface``, ``bounce``,
+        per-level ``sun_bounce`` density ratios and per-level ``diffuse_air`` and
+        ``diffuse_bounce`` factors (or None) of the camera path's pixel (drjit Floats), or
         None: the medium's
         profile as it is (module docstring). Set by the pass before it traces
         (:meth:`start`)."""
@@ -113,8 +114,9 @@ class PassLevels:
 
     def start(self, pixel: Any) -> None:
         """Point the kernels at a camera path of a pixel with ratios ``pixel`` (``view``,
-        the levels' ``sun_air``, ``sun_surface``, ``bounce``, the levels' ``sun_bounce``;
-        None: no scaling), its camera segment first."""
+        the levels' ``sun_air``, ``sun_surface``, ``bounce``, the levels' ``sun_bounce``,
+        ``diffuse_air`` and ``diffuse_bounce``: :meth:`.PixelRatio.at`; None: no scaling),
+        its camera segment first."""
         self.pixel = pixel
         self.ratio = None if pixel is None else (pixel[0], pixel[1], pixel[5])
 
