@@ -27,7 +27,7 @@ The tracer here is numpy and is run at a few million photons: its own noise is s
 running it with two seeds.
 
 Usage: python scripts/bench_bank_diffuse.py [--cases 1000,1000:sky,1000:sun,300,4000]
-       [--photons 2097152] [--seeds 5,9] [--cache DIR] [--doc]
+       [--photons 2097152] [--seeds 5,9] [--cache DIR] [--no-bounce] [--doc]
 """
 
 from __future__ import annotations
@@ -76,9 +76,11 @@ class Strip:
 
     @property
     def densest(self) -> float:
+        """The largest density of the strip (the delta tracking's majorant, per σ)."""
         return float(self.density.max())
 
     def at(self, s: np.ndarray, z: np.ndarray) -> np.ndarray:
+        """The density at distances ``s`` across the edge and heights ``z`` (nearest node)."""
         ds = self.s[1] - self.s[0]
         i = np.clip(np.round((s - self.s[0]) / ds).astype(np.int64), 0, len(self.s) - 1)
         j = np.clip((z / self.dz).astype(np.int64), 0, self.density.shape[1] - 1)
@@ -86,7 +88,8 @@ class Strip:
 
 
 def bank_strip(medium: Any, normal: np.ndarray, s0: float, s1: float, top: float) -> Strip:
-    """The medium's density along the bank's normal through the camera's start (2 m × 5 m)."""
+    """The medium's density on a 2 m × 5 m grid along the bank's normal through the world's
+    origin (the camera's start in the benchmark scene), from ``s0`` to ``s1`` metres."""
     s = np.arange(s0, s1 + 2.0, 2.0)
     nz = round(top / 5.0)
     z = (np.arange(nz) + 0.5) * top / nz
@@ -102,6 +105,7 @@ def bank_normal() -> np.ndarray:
 
 
 def direction_bin(d: np.ndarray) -> np.ndarray:
+    """The direction bin of unit travel directions ``d`` (N, 3): ``μ`` row, azimuth column."""
     mu = np.clip(((d[:, 2] + 1.0) * 0.5 * N_MU).astype(np.int64), 0, N_MU - 1)
     azimuth = (np.arctan2(d[:, 1], d[:, 0]) + np.pi) / (2.0 * np.pi)
     return mu * N_PHI + np.clip((azimuth * N_PHI).astype(np.int64), 0, N_PHI - 1)
@@ -243,9 +247,12 @@ def diffuse_ratio(bank, homogeneous, strip, sigma, albedo, g, origins, dirs, rea
     return np.where(equivalent > 1e-30, true / np.maximum(equivalent, 1e-30), 1.0)
 
 
-def frame_ratios(renderer: Any, own: Any, sigma: float, photons: int, seed: int) -> Any:
+def frame_ratios(
+    renderer: Any, own: Any, sigma: float, photons: int, seed: int, bounce: bool = True
+) -> Any:
     """The renderer's :class:`PixelRatios` at level ``sigma`` (green, 1/m), from ``own`` (its
-    own ``pixel_ratios``), with the bank's ``diffuse_air`` and ``diffuse_bounce`` added."""
+    own ``pixel_ratios``), with the bank's ``diffuse_air`` and ``diffuse_bounce`` added
+    (without ``bounce``, ``diffuse_bounce`` 1: the later segments keep the tables' light)."""
     from seahaze.render.photon_sources import emitter_photons
 
     field, optics = renderer.field, (renderer.field.albedo, renderer.field.g)
@@ -274,16 +281,17 @@ def frame_ratios(renderer: Any, own: Any, sigma: float, photons: int, seed: int)
     reach[up] = np.minimum(reach[up], (top - origins[up, 2]) / dirs[up, 2])
     common = (bank, mean, strip, sigma, optics[0], optics[1])
     air = diffuse_ratio(*common, origins, dirs, reach, ratios.view.reshape(-1))
-    bounce = np.ones_like(air)
+    later = np.ones_like(air)
     sea = np.isfinite(distance) & (geometry.instance.reshape(-1) < 0)
-    points = origins[sea] + distance[sea, None] * dirs[sea]
-    mirrored = dirs[sea] * np.array([1.0, 1.0, -1.0])
-    mirror_reach = np.minimum((top - points[:, 2]) / np.maximum(mirrored[:, 2], 1e-9), 20000.0)
-    r_mirror = ratios.bounce.reshape(-1)[sea]
-    bounce[sea] = diffuse_ratio(*common, points, mirrored, mirror_reach, r_mirror)
+    if bounce and sea.any():
+        points = origins[sea] + distance[sea, None] * dirs[sea]
+        mirrored = dirs[sea] * np.array([1.0, 1.0, -1.0])
+        reach = np.minimum((top - points[:, 2]) / np.maximum(mirrored[:, 2], 1e-9), 20000.0)
+        r_mirror = ratios.bounce.reshape(-1)[sea]
+        later[sea] = diffuse_ratio(*common, points, mirrored, reach, r_mirror)
     shape = (1, height, width)
     return dataclasses.replace(
-        ratios, diffuse_air=air.reshape(shape), diffuse_bounce=bounce.reshape(shape)
+        ratios, diffuse_air=air.reshape(shape), diffuse_bounce=later.reshape(shape)
     )
 
 
@@ -305,7 +313,9 @@ def region_errors(renderer, session, sigma_rgb, haze, reference, spp: int = 256)
     return out
 
 
-def measure(case: str, photons: int, seeds: list[int], cache: Path | None) -> dict:
+def measure(
+    case: str, photons: int, seeds: list[int], cache: Path | None, bounce: bool = True
+) -> dict:
     """One case (``V`` or ``V:sky`` / ``V:sun``: that light alone): the regions' errors
     without the ratios and with them at each seed of the bank's tracer."""
     from seahaze.render.engine import open_session
@@ -344,7 +354,7 @@ def measure(case: str, photons: int, seeds: list[int], cache: Path | None) -> di
     own = renderer.pixel_ratios
     for seed in seeds:
         start = time.perf_counter()
-        ratios = frame_ratios(renderer, own, green, photons, seed)
+        ratios = frame_ratios(renderer, own, green, photons, seed, bounce)
         traced = time.perf_counter() - start
         # The renderer asks for its pixels' ratios: these, with the bank's diffuse ones.
         renderer.pixel_ratios = lambda levels, ratios=ratios: ratios
@@ -353,7 +363,8 @@ def measure(case: str, photons: int, seeds: list[int], cache: Path | None) -> di
     return result
 
 
-def table(results: dict, photons: int) -> str:
+def table(results: dict, photons: int, bounce: bool = True) -> str:
+    """The results as docs/benchmarks.md's table, its caption saying how they were made."""
     import platform
 
     lines = [
@@ -363,7 +374,9 @@ def table(results: dict, photons: int) -> str:
         f"{BANK['distance_m']:g} m ahead, bearing {BANK['bearing_deg']:g}°, edge "
         f"{BANK['edge_m']:g} m, near side {BANK['near_ratio']:g}; `physical` 4 × 256 spp against "
         "the `volpath` references of compare_components.py (± their standard error); the "
-        f"bank's tracer {photons:,} photons per seed. Per cent, physical against the reference.",
+        f"bank's tracer {photons:,} photons per seed"
+        + ("" if bounce else "; `diffuse_bounce` left at 1 (the camera segment's alone)")
+        + ". Per cent, physical against the reference.",
         "",
         "| V (m), light | ratios | sea | sky | vessels | bank traced in (s) |",
         "|---|---|---|---|---|---|",
@@ -387,14 +400,19 @@ def main() -> None:
     parser.add_argument("--photons", type=int, default=2**21)
     parser.add_argument("--seeds", default="5,9")
     parser.add_argument("--cache", type=Path, default=ROOT / "out" / "compare-cache")
+    parser.add_argument(
+        "--no-bounce",
+        action="store_true",
+        help="leave diffuse_bounce at 1 (only the camera segment's diffuse field is scaled)",
+    )
     parser.add_argument("--doc", action="store_true", help="write the table into docs/")
     args = parser.parse_args()
     seeds = [int(x) for x in args.seeds.split(",")]
     results = {}
     for case in args.cases.split(","):
-        results[case] = measure(case, args.photons, seeds, args.cache)
+        results[case] = measure(case, args.photons, seeds, args.cache, not args.no_bounce)
         print(table({case: results[case]}, args.photons).split("|---|")[-1], flush=True)
-    text = table(results, args.photons)
+    text = table(results, args.photons, not args.no_bounce)
     print(text)
     if args.doc:
         replace_section("bank-diffuse", text, "scripts/bench_bank_diffuse.py")
