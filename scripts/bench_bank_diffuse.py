@@ -396,10 +396,19 @@ def table(results: dict, photons: int, bounce: bool = True) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--cases", default="1000,1000:sky,1000:sun,300,4000")
-    parser.add_argument("--photons", type=int, default=2**21)
-    parser.add_argument("--seeds", default="5,9")
-    parser.add_argument("--cache", type=Path, default=ROOT / "out" / "compare-cache")
+    parser.add_argument(
+        "--cases",
+        default="1000,1000:sky,1000:sun,300,4000",
+        help="visibilities (m), each alone or with :sky or :sun for that light alone",
+    )
+    parser.add_argument("--photons", type=int, default=2**21, help="the bank tracer's photons")
+    parser.add_argument("--seeds", default="5,9", help="the bank tracer's seeds, one run each")
+    parser.add_argument(
+        "--cache",
+        type=Path,
+        default=ROOT / "out" / "compare-cache",
+        help="where the volpath references are kept (compare_components.py's --cache)",
+    )
     parser.add_argument(
         "--no-bounce",
         action="store_true",
