@@ -157,7 +157,9 @@ def _warn_below_validated_range(plan: Any) -> None:
         if mode in limits.UNVALIDATED_WITH_BANK and any(s.haze.bank is not None for s in specs):
             print(
                 f"seahaze: warning: the {mode} mode is not validated in a fog bank "
-                "(haze.bank): it spreads each ray's haze evenly along it (docs/physics.md); "
+                "(haze.bank): its diffuse light there is that of haze without the bank, "
+                "the sky 2-6 % dark at 1000-4000 m and every region 13-19 % dark at 300 m "
+                "(docs/physics.md); "
                 "--mode reference is unbiased there but slow",
                 file=sys.stderr,
             )
