@@ -42,18 +42,21 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_modes import LEVELS, SCENE, region_masks, region_mean_stderr
+from bench_modes import SCENE, region_masks
 from bench_passes import replace_section
-from compare_components import cached, volpath_luminance
+from compare_components import level_reference, physical_luminance, physical_renderer, region_error
+from seahaze.render.diffuse_table import TableGrid, bin_directions, direction_bins
 
 ROOT = Path(__file__).resolve().parents[1]
 BANK = {"distance_m": 900.0, "bearing_deg": 0.0, "edge_m": 80.0, "near_ratio": 0.2}
 """The bank of docs/physics.md's comparison (``compare_components.py --bank 900,0,80,0.2``)."""
-N_MU, N_PHI = 24, 24
-"""Direction bins: ``μ`` over [−1, 1], world azimuth over [−π, π) (a bank is not symmetric
-about the sun's vertical plane)."""
-N_S, N_Z = 46, 12
-"""Cells across the edge and in height."""
+N_S = 46
+"""Cells across the edge."""
+GRID = TableGrid(n_z=12, n_mu=24, n_phi=24, folded=False)
+"""Heights and directions, the diffuse tables' bins: ``μ`` over [−1, 1], world azimuth over
+[−π, π) (its sun azimuth taken as 0: a bank is not symmetric about the sun's vertical
+plane)."""
+N_Z = GRID.n_z
 WINDOW_M = (-1500.0, 3900.0)
 """The strip tallied, across the edge from the camera's start: from 1.5 km behind the camera
 to 3 km past the edge (beyond, the field is the bank's plane-parallel one: the last cell's)."""
@@ -105,10 +108,9 @@ def bank_normal() -> np.ndarray:
 
 
 def direction_bin(d: np.ndarray) -> np.ndarray:
-    """The direction bin of unit travel directions ``d`` (N, 3): ``μ`` row, azimuth column."""
-    mu = np.clip(((d[:, 2] + 1.0) * 0.5 * N_MU).astype(np.int64), 0, N_MU - 1)
-    azimuth = (np.arctan2(d[:, 1], d[:, 0]) + np.pi) / (2.0 * np.pi)
-    return mu * N_PHI + np.clip((azimuth * N_PHI).astype(np.int64), 0, N_PHI - 1)
+    """The :data:`GRID` direction bin of unit travel directions ``d`` (N, 3)."""
+    mu, phi = direction_bins(d, 0.0, GRID.n_mu, GRID.n_phi, GRID.folded)
+    return mu * GRID.n_phi + phi
 
 
 def trace_strip(
@@ -131,7 +133,7 @@ def trace_strip(
     span = hi - lo + 2.0 * MARGIN_M
     ds, dz = (hi - lo) / N_S, strip.top / N_Z
     majorant = sigma * strip.densest
-    tally = np.zeros(N_S * N_Z * N_MU * N_PHI * 3)
+    tally = np.zeros(N_S * N_Z * GRID.n_dir * 3)
     d = np.concatenate([sun_d, sky_d])
     # A photon's horizontal irradiance spread over the launch span: power per metre of edge.
     w = np.concatenate([sun_w, sky_w]) * span
@@ -154,7 +156,7 @@ def trace_strip(
             cell = ((s[score] - lo) / ds).astype(np.int64) * N_Z + np.minimum(
                 (z[score] / dz).astype(np.int64), N_Z - 1
             )
-            key = (cell * (N_MU * N_PHI) + direction_bin(d[score]))[:, None] * 3 + np.arange(3)
+            key = (cell * GRID.n_dir + direction_bin(d[score]))[:, None] * 3 + np.arange(3)
             tally += np.bincount(key.ravel(), (w[score] / majorant).ravel(), tally.size)
         real = collide & (rng.random(len(s)) * strip.densest < strip.at(s, z))
         n_real = int(real.sum())
@@ -177,7 +179,7 @@ def trace_strip(
         w = w * lift[:, None]
         keep &= survive & (d[:, 2] != 0.0)
         s, z, d, w, direct = s[keep], z[keep], d[keep], w[keep], direct[keep]
-    return tally.reshape(N_S, N_Z, N_MU * N_PHI, 3) / (ds * dz)
+    return tally.reshape(N_S, N_Z, GRID.n_dir, 3) / (ds * dz)
 
 
 def homogeneous_fluence(
@@ -187,7 +189,7 @@ def homogeneous_fluence(
     bins, from the renderer's own photon tracer (the same at every ``s``)."""
     from seahaze.render.photon_tracer import Slab, trace_fluence
 
-    slab = Slab(top, optics[0], optics[1], 0.0, N_Z, N_MU, N_PHI, folded=False)
+    slab = Slab(top, optics[0], optics[1], 0.0, GRID.n_z, GRID.n_mu, GRID.n_phi, GRID.folded)
     fluence = trace_fluence(*photons, sea, [sigma], slab, seed)[0]
     return np.broadcast_to(fluence, (N_S, *fluence.shape))
 
@@ -197,13 +199,7 @@ def phase_toward(travel: np.ndarray, g: float, sub: int = 3) -> np.ndarray:
     ``sub × sub`` points of it) into the travel directions ``travel`` (N, 3)."""
     from seahaze.haze import hg_phase
 
-    offsets = (np.arange(sub) + 0.5) / sub
-    mu = -1.0 + 2.0 * (np.arange(N_MU)[:, None] + offsets) / N_MU
-    phi = -np.pi + 2.0 * np.pi * (np.arange(N_PHI)[:, None] + offsets) / N_PHI
-    mu, phi = mu[:, None, :, None], phi[None, :, None, :]
-    sin = np.sqrt(1.0 - mu**2)
-    points = np.stack(np.broadcast_arrays(sin * np.cos(phi), sin * np.sin(phi), mu + 0 * phi), -1)
-    points = points.reshape(N_MU * N_PHI, -1, 3)
+    points = bin_directions(GRID, sub, mirror=False).reshape(GRID.n_dir, -1, 3)
     return np.stack([hg_phase(travel @ p.T, g).mean(axis=1) for p in points], axis=1)
 
 
@@ -295,22 +291,15 @@ def frame_ratios(
     )
 
 
-def region_errors(renderer, session, sigma_rgb, haze, reference, spp: int = 256) -> dict:
-    """Per region: ``physical``'s mean over four seeds against the reference, relative, and
-    the reference's standard error."""
-    from seahaze.imaging import luminance
-
-    ref, ref_se = reference
-    runs = [renderer.render([sigma_rgb], haze.albedo, haze.g, spp, seed) for seed in range(1, 5)]
-    image = np.mean([luminance(r.levels[0]) for r in runs], axis=0)
+def region_errors(renderer, session, sigma_rgb, haze, reference) -> dict:
+    """Per region: ``physical``'s mean over four seeds at 256 spp against the reference
+    (``(mean, standard error)``), relative, and the reference's relative standard error."""
+    image, _ = physical_luminance(renderer, sigma_rgb, haze)
     pixels = session.pixels
-    out = {}
-    for name, mask in region_masks(pixels.distance_m, pixels.instance).items():
-        out[name] = (
-            image[mask].mean() / ref[mask].mean() - 1.0,
-            region_mean_stderr(ref_se, mask, ref[mask].mean()),
-        )
-    return out
+    return {
+        name: region_error(image, *reference, mask)
+        for name, mask in region_masks(pixels.distance_m, pixels.instance).items()
+    }
 
 
 def measure(
@@ -318,11 +307,8 @@ def measure(
 ) -> dict:
     """One case (``V`` or ``V:sky`` / ``V:sun``: that light alone): the regions' errors
     without the ratios and with them at each seed of the bank's tracer."""
-    from seahaze.render.engine import open_session
-    from seahaze.render.estimator import EstimatorSettings
-    from seahaze.render.physical import PhysicalRenderer
     from seahaze.sceneio import load_scene
-    from seahaze.spec import with_changes, with_overrides
+    from seahaze.spec import with_changes
     from seahaze.visibility import channel_extinction
 
     v_text, _, light = case.partition(":")
@@ -335,20 +321,8 @@ def measure(
     sigma = channel_extinction(v, haze.threshold, haze.extinction_spectrum)
     # The references of compare_components.py (the same key: its cache is shared).
     batches = 8 if v == 1000.0 else 4
-    reference_session = open_session(
-        with_overrides(base, mode="reference", levels=sorted({*LEVELS, v}))
-    )
-    key = f"{reference_session.loaded.spec.model_dump_json()}|{sigma}|{batches}"
-    reference = cached(
-        cache,
-        key,
-        lambda: volpath_luminance(reference_session, sigma, haze.albedo, haze.g, batches, 200000),
-    )
-    spec = with_overrides(base, mode="physical", levels=[v])
-    session = open_session(spec)
-    settings = EstimatorSettings()
-    settings = dataclasses.replace(settings, table_photons=settings.max_table_photons)
-    renderer = PhysicalRenderer(session.loaded, spec, settings)
+    _, _, reference = level_reference(base, v, sigma, batches, cache)
+    session, renderer = physical_renderer(base, v)
     result = {"without": region_errors(renderer, session, sigma, haze, reference)}
     green = float(sigma[1])
     own = renderer.pixel_ratios

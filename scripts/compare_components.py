@@ -74,6 +74,54 @@ def volpath_luminance(session, sigma, albedo: float, g: float, batches: int, off
     return np.mean(runs, 0), np.std(runs, 0, ddof=1) / np.sqrt(batches)
 
 
+def level_reference(base, v: float, sigma, batches: int, cache: Path | None):
+    """The ``reference`` session of scene ``base`` at level ``v`` (extinction ``sigma``, RGB),
+    the key its figures are cached under, and the level's ``volpath`` mean luminance and
+    standard error over ``batches`` batches (:func:`volpath_luminance`), from ``cache`` when
+    there."""
+    from seahaze.render.engine import open_session
+    from seahaze.spec import with_overrides
+
+    haze = base.haze
+    session = open_session(with_overrides(base, mode="reference", levels=sorted({*LEVELS, v})))
+    key = f"{session.loaded.spec.model_dump_json()}|{sigma}|{batches}"
+    figures = cached(
+        cache, key, lambda: volpath_luminance(session, sigma, haze.albedo, haze.g, batches, 200000)
+    )
+    return session, key, figures
+
+
+def physical_renderer(base, v: float, settings=None):
+    """The ``physical`` session of scene ``base`` at level ``v`` and its renderer with
+    ``settings`` (None: the defaults) and the largest diffuse tables."""
+    from seahaze.render.engine import open_session
+    from seahaze.render.estimator import EstimatorSettings
+    from seahaze.render.physical import PhysicalRenderer
+    from seahaze.spec import with_overrides
+
+    spec = with_overrides(base, mode="physical", levels=[v])
+    session = open_session(spec)
+    settings = settings or EstimatorSettings()
+    settings = dataclasses.replace(settings, table_photons=settings.max_table_photons)
+    return session, PhysicalRenderer(session.loaded, spec, settings)
+
+
+def physical_luminance(renderer, sigma, haze) -> tuple[np.ndarray, np.ndarray]:
+    """The level's and the clean image's mean luminance over four seeds at 256 spp."""
+    from seahaze.imaging import luminance
+
+    runs = [renderer.render([sigma], haze.albedo, haze.g, 256, seed) for seed in range(1, 5)]
+    level = np.mean([luminance(r.levels[0]) for r in runs], 0)
+    return level, np.mean([luminance(r.clean) for r in runs], 0)
+
+
+def region_error(image, ref, ref_se, mask) -> tuple[float, float]:
+    """``image``'s mean over ``mask`` against the reference's, relative, and the reference
+    mean's relative standard error."""
+    mean = ref[mask].mean()
+    return image[mask].mean() / mean - 1.0, region_mean_stderr(ref_se, mask, mean)
+
+
 def cached(cache: Path | None, key: str, compute):
     """``compute()`` (a tuple of arrays), kept in ``cache`` under a digest of ``key``."""
     if cache is None:
@@ -139,12 +187,9 @@ def main() -> None:
     parser.add_argument("--cache", type=Path, default=None, help="keep volpath means here")
     args = parser.parse_args()
 
-    from seahaze.imaging import luminance
-    from seahaze.render.engine import open_session
     from seahaze.render.estimator import EstimatorSettings
-    from seahaze.render.physical import PhysicalRenderer
     from seahaze.sceneio import load_scene
-    from seahaze.spec import with_changes, with_overrides
+    from seahaze.spec import with_changes
     from seahaze.visibility import channel_extinction
 
     base, _ = load_scene(SCENE)
@@ -188,30 +233,18 @@ def main() -> None:
     v = args.visibility
     sigma = channel_extinction(v, haze.threshold, haze.extinction_spectrum)
     start = time.perf_counter()
-    levels = sorted({*LEVELS, v})
-    reference = open_session(with_overrides(base, mode="reference", levels=levels))
-    key = f"{reference.loaded.spec.model_dump_json()}|{sigma}|{args.batches}"
-    ref, ref_se = cached(
-        args.cache,
-        key,
-        lambda: volpath_luminance(reference, sigma, haze.albedo, haze.g, args.batches, 200000),
-    )
+    reference, key, (ref, ref_se) = level_reference(base, v, sigma, args.batches, args.cache)
     clean_ref, _ = cached(
         args.cache,
         key + "|clean",
         lambda: volpath_luminance(reference, 0.0, haze.albedo, haze.g, 4, 300000),
     )
 
-    spec = with_overrides(base, mode="physical", levels=[v])
-    session = open_session(spec)
-    settings = EstimatorSettings()
+    settings = None
     if args.vessel_light is not None:
         settings = EstimatorSettings(vessel_light_share=args.vessel_light)
-    settings = dataclasses.replace(settings, table_photons=settings.max_table_photons)
-    renderer = PhysicalRenderer(session.loaded, spec, settings)
-    runs = [renderer.render([sigma], haze.albedo, haze.g, 256, seed) for seed in range(1, 5)]
-    phys = np.mean([luminance(r.levels[0]) for r in runs], 0)
-    clean = np.mean([luminance(r.clean) for r in runs], 0)
+    session, renderer = physical_renderer(base, v, settings)
+    phys, clean = physical_luminance(renderer, sigma, haze)
 
     pixels = session.pixels
     regions = region_masks(pixels.distance_m, pixels.instance)
@@ -240,8 +273,7 @@ def main() -> None:
     for name, m in regions.items():
         if not m.any():
             continue
-        diff = phys[m].mean() / ref[m].mean() - 1.0
-        se = region_mean_stderr(ref_se, m, ref[m].mean())
+        diff, se = region_error(phys, ref, ref_se, m)
         clean_diff = clean[m].mean() / clean_ref[m].mean() - 1.0
         print(
             f"  {name:13s} hazy {100 * diff:+6.2f} ± {100 * se:.2f} %   "

@@ -102,7 +102,7 @@ def direction_bins(
     return mu_bin, phi_bin
 
 
-def _bin_directions(grid: TableGrid, sub: int, mirror: bool) -> np.ndarray:
+def bin_directions(grid: TableGrid, sub: int, mirror: bool) -> np.ndarray:
     """Unit vectors (sun azimuth 0) of ``sub × sub`` stratified points in every direction bin,
     shape (n_mu, n_phi, points, 3); with ``mirror`` the points at ``−φ`` are added."""
     offsets = (np.arange(sub) + 0.5) / sub
@@ -122,8 +122,8 @@ def phase_matrix(g: float, grid: TableGrid = DEFAULT_GRID, sub: int = 4) -> np.n
     """``P[node, bin]``: the HG phase value (1/sr) from direction bin ``bin`` into the centre of
     bin ``node``, averaged over the bin (and its mirror azimuth), rows summing to 1 over the
     bins' solid angles. Depends only on ``g`` and the grid, so it is cached across levels."""
-    centres = _bin_directions(grid, 1, mirror=False).reshape(grid.n_dir, 3)
-    points = _bin_directions(grid, sub, mirror=grid.folded).reshape(grid.n_dir, -1, 3)
+    centres = bin_directions(grid, 1, mirror=False).reshape(grid.n_dir, 3)
+    points = bin_directions(grid, sub, mirror=grid.folded).reshape(grid.n_dir, -1, 3)
     p = np.empty((grid.n_dir, grid.n_dir))
     for j in range(grid.n_dir):
         p[:, j] = hg_phase(centres @ points[j].T, g).mean(axis=1)
