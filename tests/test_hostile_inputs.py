@@ -331,7 +331,7 @@ def test_levels_below_the_validated_range_warn(tmp_path, no_render):
 
 def test_varying_haze_below_its_validated_range_warns(tmp_path, no_render):
     """In patches physical is validated down to 1000 m: a thicker level gets the patches' own
-    warning; in a bank it is not validated at all, whatever the level."""
+    warning; in a bank it is validated down to 300 m, and a thinner level gets the bank's."""
     scene = tmp_path / "patchy.yaml"
     text = TINY.read_text().replace("haze: {levels: [1000]}", "haze: {patches: {}}")
     scene.write_text(text)
@@ -343,5 +343,9 @@ def test_varying_haze_below_its_validated_range_warns(tmp_path, no_render):
     code, _, err = run(["render", str(scene), "--out", str(tmp_path / "p"), "--vis", "1000"])
     assert "validated" not in err
     scene.write_text(text.replace("patches: {}", "bank: {distance_m: 900}"))
-    code, _, err = run(["render", str(scene), "--out", str(tmp_path / "q"), "--vis", "4000"])
-    assert "the physical mode is not validated in a fog bank" in err
+    code, _, err = run(["render", str(scene), "--out", str(tmp_path / "q"), "--vis", "300,4000"])
+    assert "validated" not in err
+    code, _, err = run(["render", str(scene), "--out", str(tmp_path / "r"), "--vis", "200,4000"])
+    (warning,) = [line for line in err.splitlines() if "validated" in line]
+    assert "in a fog bank the physical mode is validated" in warning
+    assert "down to V = 300 m; 200 m lie below it (" in warning

@@ -183,8 +183,8 @@ def test_the_diffuse_ratios_scale_the_diffuse_field_of_their_own_segments():
     own_ratios = renderer.pixel_ratios
 
     def render_with(air: float, later: float) -> np.ndarray:
-        def ratios(levels):
-            base = own_ratios(levels)
+        def ratios(levels, *rest):
+            base = own_ratios(levels, *rest)
             ones = np.ones_like(base.sun_air)
             return dataclasses.replace(base, diffuse_air=air * ones, diffuse_bounce=later * ones)
 

@@ -114,11 +114,16 @@ class Bank:
     origin_xy: tuple[float, float] = (0.0, 0.0)
     """The camera's starting point (m)."""
 
-    def modulation(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """``m`` at world points ``(x, y)`` (m, at time 0)."""
+    def beyond(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Metres past the edge of world points ``(x, y)`` (m, at time 0): their distance along
+        the bearing from the camera's starting point less ``D`` (negative: the camera's side)."""
         az = math.radians(self.toward_deg)
         s = (x - self.origin_xy[0]) * math.cos(az) + (y - self.origin_xy[1]) * math.sin(az)
-        step = 0.5 * (1.0 + np.tanh(0.5 * (s - self.distance_m) / self.edge_m))  # logistic
+        return s - self.distance_m
+
+    def modulation(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """``m`` at world points ``(x, y)`` (m, at time 0)."""
+        step = 0.5 * (1.0 + np.tanh(0.5 * self.beyond(x, y) / self.edge_m))  # logistic
         return self.near_ratio + (1.0 - self.near_ratio) * step
 
 

@@ -929,6 +929,13 @@ class EstimatorSpec(_Spec):
         description="Photons per level of the diffuse tables (default: by the pass's size, "
         "2^17 to 2^20).",
     )
+    bank_photons: int | None = Field(
+        None,
+        ge=1024,
+        le=1 << 24,
+        description="Photons per level of a fog bank's own diffuse field (default: the "
+        "diffuse tables' number).",
+    )
 
 
 class CameraModelSpec(_Spec):

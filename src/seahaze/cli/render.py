@@ -150,27 +150,25 @@ def _block_location(file: str | None, key: str) -> str:
 
 def _warn_below_validated_range(plan: Any) -> None:
     """A warning for levels thinner than the mode's validated range (docs/physics.md): its
-    own where a job's haze varies across the sea (patches: a range of their own; a bank:
-    none)."""
+    own where a job's haze varies across the sea (patches, a bank: ranges of their own)."""
     for mode in sorted({job.spec.render.mode for job in plan.jobs}):
         specs = [job.spec for job in plan.jobs if job.spec.render.mode == mode]
-        if mode in limits.UNVALIDATED_WITH_BANK and any(s.haze.bank is not None for s in specs):
-            print(
-                f"seahaze: warning: the {mode} mode is not validated in a fog bank "
-                "(haze.bank): its diffuse light there is that of haze without the bank, "
-                "the sky 2-6 % dark at 1000-4000 m and every region 13-19 % dark at 300 m "
-                "(docs/physics.md); "
-                "--mode reference is unbiased there but slow",
-                file=sys.stderr,
-            )
-            continue
-        varying = any(s.haze.patches is not None for s in specs)
-        floor = (limits.VARYING_VALIDATED_FROM_M if varying else limits.VALIDATED_FROM_M).get(mode)
+        patches = any(s.haze.patches is not None for s in specs)
+        bank = any(s.haze.bank is not None for s in specs)
+        # Patches are the least validated: with patches and a bank, theirs is the range.
+        ranges = (
+            limits.VARYING_VALIDATED_FROM_M
+            if patches
+            else limits.BANK_VALIDATED_FROM_M
+            if bank
+            else limits.VALIDATED_FROM_M
+        )
+        floor = ranges.get(mode)
         below = sorted(v for v in plan.levels if floor is not None and v < floor)
         if below:
-            where = "in patchy haze " if varying else ""
-            why = ", where dense patches render too bright" if varying else ""
-            within = "3.5 %" if varying else "3 %"
+            where = "in patchy haze " if patches else "in a fog bank " if bank else ""
+            why = ", where dense patches render too bright" if patches else ""
+            within = "3.5 %" if patches else "3 %"
             print(
                 f"seahaze: warning: {where}the {mode} mode is validated (within {within} of "
                 f"converged references) down to V = {floor:g} m; "

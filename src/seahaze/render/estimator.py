@@ -48,6 +48,9 @@ class EstimatorSettings:
     """Fewest photons per level table (half from the sun, half from the sky)."""
     max_table_photons: int = 1 << 20
     """Most photons per level table."""
+    bank_photons: int | None = None
+    """Photons per level of a fog bank's own diffuse field (:mod:`seahaze.render.bank_diffuse`);
+    None: :meth:`bank_photons_for` the tables' photons."""
     max_levels_per_pass: int = 12
     """Most levels one pass renders (its kernel grows with the count; more levels are rendered
     in several passes of the same camera paths, :func:`seahaze.render.physical.levels_per_pass`)."""
@@ -70,8 +73,9 @@ class EstimatorSettings:
                 raise ValueError(f"estimator.{name} must be an integer >= {floor}, got {value}")
         if self.max_table_photons < self.min_table_photons:
             raise ValueError("estimator.max_table_photons must be >= min_table_photons")
-        if self.table_photons is not None and self.table_photons < 1:
-            raise ValueError("estimator.table_photons must be >= 1 (or null: by the pass)")
+        for name in ("table_photons", "bank_photons"):
+            if getattr(self, name) is not None and getattr(self, name) < 1:
+                raise ValueError(f"estimator.{name} must be >= 1 (or null: by the pass)")
 
     def photons_for(self, samples: int) -> int:
         """Photons per level table for a pass of ``samples`` camera samples (pixels × spp):
@@ -85,6 +89,16 @@ class EstimatorSettings:
         wanted = max(samples, 1) / self.samples_per_photon
         rounded = 1 << max(round(math.log2(wanted)), 0)
         return min(max(rounded, self.min_table_photons), self.max_table_photons)
+
+    def bank_photons_for(self, table_photons: int) -> int:
+        """Photons per level of a fog bank's diffuse field for a pass whose tables get
+        ``table_photons`` each: :attr:`bank_photons` if set, else the same number (at least
+        :attr:`min_table_photons`). The bank's tally has forty-odd cells across the edge for
+        each of the table's heights, but its ratio is summed along rays through them
+        (docs/benchmarks.md, "What a fog bank's own diffuse field costs")."""
+        if self.bank_photons is not None:
+            return self.bank_photons
+        return max(table_photons, self.min_table_photons)
 
     def vessel_light_spp(self, spp: int) -> int:
         """Samples per pixel asked of the vessel-light pass for ``spp`` of the main pass: the

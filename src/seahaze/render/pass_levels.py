@@ -129,7 +129,9 @@ class PassLevels:
             pairs = lambda a, b: [select(first, x, y) for x, y in zip(a, b, strict=True)]  # noqa: E731
             diffuse = None
             if diffuse_air is not None:
-                diffuse = pairs(diffuse_air, diffuse_bounce)
+                # Without later segments' ratios, they keep the tables' light (a factor 1).
+                later = diffuse_bounce or [1.0] * len(diffuse_air)
+                diffuse = pairs(diffuse_air, later)
             self.ratio = (select(first, view, bounce), pairs(sun_air, sun_bounce), diffuse)
 
     def follow_light(self) -> None:

@@ -164,7 +164,7 @@ def trace_fluence(
     photon = mi.UInt64(lane)
     rng = mi.PCG32(lanes)  # the constructor would add the lane index: seed explicitly
     rng.seed(dr.opaque(mi.UInt64, seed) + photon, photon)
-    tables = _SeaTables(sea)
+    tables = SeaTables(sea)
     params = _Params(slab)
 
     z, d, w = _first_flight(kind, d, w, sigma, rng, tables, params)
@@ -244,7 +244,7 @@ class _Params:
         object.__setattr__(self, "slab", slab)
 
 
-class _SeaTables:
+class SeaTables:
     """:class:`SeaReflectance` uploaded for gathers in the kernel."""
 
     def __init__(self, sea: SeaReflectance) -> None:
@@ -277,7 +277,7 @@ class _SeaTables:
         return out, weight
 
 
-def _first_flight(kind, d, w, sigma, rng, tables: _SeaTables, params: _Params):
+def _first_flight(kind, d, w, sigma, rng, tables: SeaTables, params: _Params):
     """Start state after the untallied first flight: sun photons reflected at the sea (kind 0)
     with weight ``exp(−τ/|μ|)``, sun photons scattered on the way down (kind 1) at a point from
     the truncated exponential with weight ``(1 − exp(−τ/|μ|))·albedo``, sky photons (kind 2)

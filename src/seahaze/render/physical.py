@@ -22,7 +22,7 @@ import importlib
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -185,7 +185,8 @@ class PhysicalRenderer:
         ratios = None
         if self.field is not None:
             say("pixel density ratios")
-            ratios = self.pixel_ratios(sigma[:, 1] if len(sigma) else np.full(1, 1e-6))
+            green = sigma[:, 1] if len(sigma) else np.full(1, 1e-6)
+            ratios = self.pixel_ratios(green, seed, self.settings.bank_photons_for(photons))
         sensor = self.loaded.scene.sensors()[0]
         most = self.settings.max_levels_per_pass
         group = levels_per_pass(cam.width, cam.height, len(sigma), most)
@@ -222,18 +223,47 @@ class PhysicalRenderer:
         assert clean is not None
         return PhysicalPass(clean, levels, table_seconds)
 
-    def pixel_ratios(self, sigma: np.ndarray) -> PixelRatios:
+    def pixel_ratios(
+        self, sigma: np.ndarray, seed: int = 0, bank_photons: int | None = None
+    ) -> PixelRatios:
         """Each pixel's density ratios in the scene's field (:func:`pixel_ratios`) for levels
         of (green) extinction ``sigma`` (L,) in 1/m, from the geometry pass's pixel-centre rays
-        and the sun's direction; kept for the frame's next render of the same levels."""
+        and the sun's direction; in a bank alone with the camera segment's ``diffuse_air``
+        ratios too (:mod:`seahaze.render.bank_diffuse`, its field traced from ``seed`` with
+        ``bank_photons`` per level; None: the settings' for the fewest table photons). Kept
+        for the frame's next render of the same levels and seed."""
         assert self.field is not None
-        key = tuple(float(x) for x in sigma)
+        key = (tuple(float(x) for x in sigma), seed, bank_photons)
         if key not in self._ratios:
             if self.geometry is None:
                 self.geometry = render_geometry(self.loaded)
             sun = sun_axis(self.sun)
-            self._ratios[key] = pixel_ratios(self.field, self.geometry, sun, np.asarray(key))
+            levels = np.asarray(key[0])
+            ratios = pixel_ratios(self.field, self.geometry, sun, levels)
+            if self.segments is not None:
+                photons = bank_photons or self.settings.bank_photons_for(0)
+                air, bounce = self.bank_diffuse(ratios, levels, seed, photons)
+                ratios = replace(ratios, diffuse_air=air, diffuse_bounce=bounce)
+            self._ratios[key] = ratios
         return self._ratios[key]
+
+    def bank_diffuse(
+        self, ratios: PixelRatios, sigma: np.ndarray, seed: int, photons: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(L, H, W) each pixel's ``diffuse_air`` and ``diffuse_bounce`` ratios in the scene's
+        bank (:mod:`seahaze.render.bank_diffuse`) at levels of (green) extinction ``sigma``,
+        the bank's field traced with ``photons`` per level from ``seed``."""
+        from . import bank_diffuse  # a Mitsuba variant is set by now
+
+        assert self.field is not None and self.geometry is not None
+        field = self.field
+        origin = (float(self.geometry.origin[0]), float(self.geometry.origin[1]))
+        strip, fluence = bank_diffuse.trace_bank(
+            field, self.sun, self.sky, self.sea, sigma, origin, photons, seed
+        )
+        return bank_diffuse.diffuse_ratios(
+            field, self.geometry, ratios.view, strip, fluence, sigma, self.sea
+        )
 
     def vessel_light(
         self,

@@ -36,9 +36,9 @@ integrals of the field, :class:`PixelRatios`):
 ``diffuse_air`` and ``diffuse_bounce`` (one per level, optional)
     Factors on the diffuse field (the tables' light) of the camera segment and of the later
     segments: the field's diffuse in-scattering along the ray over the equivalent
-    profile's. :func:`pixel_ratios` leaves them None (the tables as they are); a caller that
-    knows the field's own diffuse light sets them (``scripts/bench_bank_diffuse.py`` traces
-    a bank's and measures what they would fix).
+    profile's. :func:`pixel_ratios` leaves them None (the tables as they are); the renderer
+    sets them in a bank alone from the bank's own diffuse field
+    (:mod:`seahaze.render.bank_diffuse`).
 
 The aureole a surface samples around the sun travels through the column above the surface
 (``sun_surface``), not along the later segments' ratios: its directions lie around the sun.
@@ -47,8 +47,8 @@ What the scaled profile still misses is where along a ray the haze lies and how 
 field answers the haze around each point: the tables are the profile's. docs/physics.md ("Haze
 that varies across the sea in the physical mode") measures what that costs per region against
 the ``reference`` mode, which path-traces the field: dense patches shield their own inside
-(too bright at thick levels), and a bank, which puts a ray's haze beyond its edge, is not
-rendered within 3 % at any level.
+(too bright at thick levels). A bank, which puts a ray's haze beyond its edge and lets the
+horizon's light reach its face, gets the diffuse ratios of its own field.
 
 Inside a pixel the ratios are the centre ray's: a sample that meets the sky beside a vessel's
 edge uses the vessel's (a pixel's width of silhouette). The sun ratios are integrated on a

@@ -1,0 +1,161 @@
+"""A fog bank's own diffuse field (``seahaze.render.strip_tracer``, ``render.bank_diffuse``).
+
+* Without a bank (near ratio 1, scale 1) the bank's tally is its profile's, bit for bit, when
+  every photon is traced through both: they draw the same random numbers and see the same
+  density.
+* The profile's field, averaged across the strip, is the diffuse tables' own tracer's
+  (``photon_tracer.trace_fluence``, an independent estimator: analog free paths, the first
+  flight split, track lengths summed in height) per height and μ band, within their noise.
+* Deep inside a thick bank the field is the plane-parallel one of the bank's density.
+* The same seed gives the same bytes.
+* ``diffuse_air``: a diffuse field that is the same everywhere gives every ray the ratio 1
+  whatever the bank does to the ray (``∫ e^{−τ} σρ ds = 1 − e^{−σℓ}`` in both), and a bank
+  field twice the profile's gives 2.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from seahaze.haze_field import Bank, Drift, HazeField
+from seahaze.medium import HomogeneousSlab
+from seahaze.nonuniform import NonUniformHaze
+
+pytestmark = pytest.mark.usefixtures("mitsuba_variant")
+
+SLAB = HomogeneousSlab(top=300.0, albedo=0.998, g=0.75)
+SUN_ELEVATION = np.radians(35.0)
+
+
+def _photons(count: int, seed: int) -> tuple[tuple, tuple]:
+    """A sun at 35° (irradiance 1 W m⁻² on a horizontal plane) and a uniform sky of the same
+    horizontal irradiance, ``count`` photons each, travelling down."""
+    rng = np.random.default_rng(seed)
+    sun_d = np.tile([-np.cos(SUN_ELEVATION) * 0.8, -np.cos(SUN_ELEVATION) * 0.6, 0.0], (count, 1))
+    sun_d[:, 2] = -np.sin(SUN_ELEVATION)
+    sun = (sun_d, np.full((count, 3), 1.0 / count))
+    mu = np.sqrt(rng.random(count))  # cosine-weighted: each photon carries equal irradiance
+    phi = 2.0 * np.pi * rng.random(count)
+    s = np.sqrt(1.0 - mu**2)
+    sky_d = np.stack([s * np.cos(phi), s * np.sin(phi), -mu], axis=1)
+    return sun, (sky_d, np.full((count, 3), 1.0 / count))
+
+
+def _grey_sea():
+    """A sea that sends every photon up at one of eight fixed directions with weight 0.3."""
+    from seahaze.render.photon_tracer import SeaReflectance
+
+    up = np.radians([10.0, 20.0, 35.0, 50.0, 60.0, 70.0, 80.0, 89.0])
+    wo = np.stack([np.cos(up), np.zeros_like(up), np.sin(up)], axis=1)
+    return SeaReflectance(wo[None], np.full((1, len(up), 3), 0.3))
+
+
+def _strip(near_ratio: float = 0.2, scale: float = 1.0, toward_deg: float = 0.0):
+    from seahaze.render.strip_tracer import Strip
+
+    return Strip(
+        -1500.0, 1500.0, 10, SLAB.top, 6, 8, 8, toward_deg, 80.0, near_ratio, scale, 3000.0
+    )
+
+
+def test_without_a_bank_the_bank_tally_is_the_profiles_bit_for_bit():
+    from seahaze.render.strip_tracer import trace_strip
+
+    got = trace_strip(*_photons(4096, 1), _grey_sea(), [0.004], SLAB, _strip(1.0), 3, 1)
+    assert got.bank.sum() > 0.0
+    np.testing.assert_array_equal(got.bank, got.profile)
+    # And a bank is not its profile: the same photons see another field.
+    banked = trace_strip(*_photons(4096, 1), _grey_sea(), [0.004], SLAB, _strip(0.2), 3, 1)
+    assert not np.array_equal(banked.bank, banked.profile)
+    np.testing.assert_array_equal(banked.profile, got.profile)
+
+
+def test_the_same_seed_gives_the_same_bytes():
+    from seahaze.render.strip_tracer import trace_strip
+
+    runs = [trace_strip(*_photons(2048, 2), _grey_sea(), [0.01], SLAB, _strip(), 7) for _ in "ab"]
+    np.testing.assert_array_equal(runs[0].bank, runs[1].bank)
+    other = trace_strip(*_photons(2048, 2), _grey_sea(), [0.01], SLAB, _strip(), 8)
+    assert not np.array_equal(runs[0].bank, other.bank)
+
+
+def _bands(fluence: np.ndarray, n_mu: int) -> np.ndarray:
+    """(n_z, 4, rgb): fluence summed over azimuths and over μ in four bands."""
+    n_z = fluence.shape[0]
+    by_mu = fluence.reshape(n_z, n_mu, -1, 3).sum(axis=2)
+    return by_mu.reshape(n_z, 4, n_mu // 4, 3).sum(axis=2)
+
+
+def test_the_profile_field_is_the_diffuse_tables_tracers():
+    from seahaze.render.photon_tracer import Slab, trace_fluence
+    from seahaze.render.strip_tracer import trace_strip
+
+    sigma = 3.912 / 1000.0
+    photons, sea = _photons(1 << 18, 4), _grey_sea()
+    strip = _strip()
+    got = trace_strip(*photons, sea, [sigma], SLAB, strip, 11, 1).profile[0].mean(axis=0)
+    slab = Slab(SLAB.top, SLAB.albedo, SLAB.g, 0.0, strip.n_z, strip.n_mu, strip.n_phi, False)
+    want = trace_fluence(*photons, sea, [sigma], slab, 12)[0]
+    got_bands, want_bands = _bands(got, strip.n_mu), _bands(want, strip.n_mu)
+    # Every band holds light, and they agree within a few per cent (both tracers' noise).
+    assert np.all(want_bands > 0.0)
+    np.testing.assert_allclose(got_bands, want_bands, rtol=0.03)
+    np.testing.assert_allclose(got.sum(), want.sum(), rtol=0.005)
+
+
+def test_deep_inside_a_thick_bank_the_field_is_the_plane_parallel_one():
+    from seahaze.render.photon_tracer import Slab, trace_fluence
+    from seahaze.render.strip_tracer import Strip, trace_strip
+
+    sigma, scale = 3.912 / 300.0, 1.3
+    photons, sea = _photons(1 << 18, 5), _grey_sea()
+    # Cells from 3 to 5 km past the edge: ten transport mean free paths of this bank.
+    strip = Strip(3000.0, 5000.0, 2, SLAB.top, 6, 8, 8, 0.0, 80.0, 0.2, scale, 3000.0)
+    got = trace_strip(*photons, sea, [sigma], SLAB, strip, 13).bank[0]
+    slab = Slab(SLAB.top, SLAB.albedo, SLAB.g, 0.0, strip.n_z, strip.n_mu, strip.n_phi, False)
+    want = trace_fluence(*photons, sea, [sigma * scale], slab, 14)[0]
+    for cell in got:
+        np.testing.assert_allclose(cell.sum(axis=1), want.sum(axis=1), rtol=0.015)
+
+
+def _bank_medium() -> NonUniformHaze:
+    bank = Bank(700.0, 20.0, 80.0, 0.25, origin_xy=(30.0, -10.0))
+    field = HazeField(bank=bank, drift=Drift(speed_m_s=3.0, toward_deg=200.0, time_s=40.0))
+    return NonUniformHaze(SLAB, field, 1.1)
+
+
+def _rays():
+    dirs = np.array(
+        [[1.0, 0.3, -0.02], [0.9, 0.4, 0.01], [0.3, 1.0, 0.05], [-1.0, 0.2, -0.01], [1, 0, 0.2]]
+    )
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    reach = np.array([750.0, 20000.0, 4000.0, 1200.0, 300.0])
+    up = dirs[:, 2] > 0
+    reach[up] = np.minimum(reach[up], (SLAB.top - 15.0) / dirs[up, 2])
+    return np.array([0.0, 0.0, 15.0]), dirs, reach
+
+
+def test_a_diffuse_field_the_same_everywhere_gives_ratio_one_and_twice_it_two():
+    from seahaze.render.bank_diffuse import SourceTables, bank_strip, ray_sums
+
+    medium = _bank_medium()
+    strip = bank_strip(medium, (0.0, 0.0))
+    rng = np.random.default_rng(3)
+    # One source per direction, the same in every cell (any shape over directions).
+    per_dir = rng.random((2, 1, strip.n_dir)) + 0.1
+    cells = np.broadcast_to(per_dir, (2, strip.n_s * strip.n_z, strip.n_dir))
+    heights = np.broadcast_to(per_dir, (2, strip.n_z, strip.n_dir))
+    origin, dirs, reach = _rays()
+    starts = np.broadcast_to(origin, dirs.shape)
+    # The pixels' view ratios: the field's reduced length over the profile's, exactly.
+    field_length = medium.lengths_along(starts, dirs, np.zeros(len(dirs)), reach)
+    view = field_length / medium.profile.path_length(origin[2], dirs[:, 2], reach)
+    assert np.ptp(view) > 0.5  # rays that see very different amounts of the bank
+    sigma = np.array([3.912 / 300.0, 3.912 / 2000.0])
+    uniform = SourceTables(strip, cells, heights)
+    true, equivalent = ray_sums(medium, uniform, sigma, starts, dirs, reach, view)
+    np.testing.assert_allclose(true / equivalent, 1.0, atol=2e-3)
+    twice = SourceTables(strip, 2.0 * cells, heights)
+    doubled, _ = ray_sums(medium, twice, sigma, starts, dirs, reach, view)
+    np.testing.assert_allclose(doubled, 2.0 * true, rtol=1e-12)
