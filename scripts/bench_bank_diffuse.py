@@ -11,7 +11,7 @@ time is that of the bank's ratios alone (tracing the strip and summing the pixel
 the one level, with the photons the tables get at full size (2^20).
 
 Usage: python scripts/bench_bank_diffuse.py [--cases 300,1000,4000]
-       [--bank 900,0,80,0.2] [--cache DIR] [--doc]
+       [--banks 900,0,80,0.2/600,35,150,0.35] [--cache DIR] [--doc]
 """
 
 from __future__ import annotations
@@ -72,29 +72,29 @@ def measure(v: float, bank: dict, cache: Path | None) -> dict:
     return {"regions": regions, "ratios_s": ratios_s}
 
 
-def table(results: dict, bank: dict) -> str:
-    """The results as docs/benchmarks.md's table, its caption saying how they were made."""
+def table(results: dict) -> str:
+    """The results (by bank text and V) as docs/benchmarks.md's table, its caption saying how
+    they were made."""
     lines = [
         "## physical in a fog bank against converged references (scripts/bench_bank_diffuse.py)",
         "",
-        f"Machine: {platform.machine()}, `llvm_ad_rgb`. Benchmark scene (80×45), bank "
-        f"{bank['distance_m']:g} m ahead, bearing {bank['bearing_deg']:g}°, edge "
-        f"{bank['edge_m']:g} m, near side {bank['near_ratio']:g}; `physical` {len(SEEDS)} "
-        f"renders of {SPP} spp (their own seeds, so their own traced banks; 2^20 photons per "
-        "level for tables and bank) against the `volpath` references of "
+        f"Machine: {platform.machine()}, `llvm_ad_rgb`. Benchmark scene (80×45); a bank is "
+        "DISTANCE m ahead, BEARING°, EDGE m, NEAR ratio (`haze.bank`); `physical` "
+        f"{len(SEEDS)} renders of {SPP} spp (their own seeds, so their own traced banks; 2^20 "
+        "photons per level for tables and bank) against the `volpath` references of "
         "compare_components.py. Per cent: the error of the renders' mean ± the reference's "
         "standard error, then (in brackets) the standard deviation of one render's error. "
         "Ratios: the bank's strip traced and the pixels' rays summed, for the one level.",
         "",
-        "| V (m) | sea | sky | vessels | ratios (s) |",
-        "|---|---|---|---|---|",
+        "| bank | V (m) | sea | sky | vessels | ratios (s) |",
+        "|---|---|---|---|---|---|",
     ]
-    for v, result in results.items():
+    for (bank, v), result in results.items():
         cells = [
             "{:+.2f} ± {:.2f} ({:.2f})".format(*(100 * x for x in result["regions"][r]))
             for r in ("sea", "sky", "vessel")
         ]
-        lines.append(f"| {v:g} | {' | '.join(cells)} | {result['ratios_s']:.1f} |")
+        lines.append(f"| {bank} | {v:g} | {' | '.join(cells)} | {result['ratios_s']:.1f} |")
     return "\n".join(lines)
 
 
@@ -102,7 +102,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--cases", default="300,1000,4000", help="visibilities (m)")
     parser.add_argument(
-        "--bank", default="900,0,80,0.2", help="haze.bank as DISTANCE,BEARING,EDGE,NEAR"
+        "--banks",
+        default="900,0,80,0.2/600,35,150,0.35",
+        help="haze.bank as DISTANCE,BEARING,EDGE,NEAR, several separated by /",
     )
     parser.add_argument(
         "--cache",
@@ -112,12 +114,12 @@ def main() -> None:
     )
     parser.add_argument("--doc", action="store_true", help="write the table into docs/")
     args = parser.parse_args()
-    bank = bank_of(args.bank)
     results = {}
-    for v in (float(x) for x in args.cases.split(",")):
-        results[v] = measure(v, bank, args.cache)
-        print(table({v: results[v]}, bank).split("|---|")[-1], flush=True)
-    text = table(results, bank)
+    for bank in args.banks.split("/"):
+        for v in (float(x) for x in args.cases.split(",")):
+            results[bank, v] = measure(v, bank_of(bank), args.cache)
+            print(table({(bank, v): results[bank, v]}).split("|---|")[-1], flush=True)
+    text = table(results)
     print(text)
     if args.doc:
         replace_section("bank-diffuse", text, "scripts/bench_bank_diffuse.py")

@@ -159,3 +159,23 @@ def test_a_diffuse_field_the_same_everywhere_gives_ratio_one_and_twice_it_two():
     twice = SourceTables(strip, 2.0 * cells, heights)
     doubled, _ = ray_sums(medium, twice, sigma, starts, dirs, reach, view)
     np.testing.assert_allclose(doubled, 2.0 * true, rtol=1e-12)
+
+
+def test_ratios_spread_bilinearly_within_a_segment_and_never_across_one():
+    from seahaze.render.bank_diffuse import spread_within_segments
+
+    height, width, step = 37, 50, 4
+    rows, cols = np.arange(0, height, step), np.arange(0, width, step)
+    # One segment: a linear function of the pixel is reproduced exactly between grid pixels.
+    plane = lambda y, x: 0.3 + 0.01 * y - 0.02 * x  # noqa: E731
+    grid = plane(rows[:, None], cols[None, :])[None]
+    labels = np.full((height, width), -2)
+    got = spread_within_segments(grid, labels, step)[0]
+    y, x = np.mgrid[:height, :width]
+    inside = (y <= rows[-1]) & (x <= cols[-1])  # beyond the last grid pixel: held, not extrapolated
+    np.testing.assert_allclose(got[inside], plane(y, x)[inside], rtol=0, atol=1e-12)
+    # A vessel (label 0) on the sky: each takes only its own segment's values.
+    labels[10:25, 13:31] = 0
+    two = np.where(labels[::step, ::step] == 0, 5.0, 1.0)[None]
+    spread = spread_within_segments(two, labels, step)[0]
+    np.testing.assert_array_equal(spread, np.where(labels == 0, 5.0, 1.0))

@@ -22,8 +22,9 @@ over :data:`RAY_POINTS` points of the ray (cells growing quadratically from the 
 fluence ``Φ`` of :mod:`seahaze.render.strip_tracer` (the bank's per cell of distance past the
 edge and height; the profile's averaged over the strip, where it is horizontally uniform). The
 kernels scale the tables' light on the camera segment by it (``PixelRatios.diffuse_air``). The
-sum is taken on a grid of at most :data:`RATIO_GRID_PIXELS` pixels and spread to the pixels
-around each (the ratio changes slowly across the image).
+sum is taken on a grid of at most :data:`RATIO_GRID_PIXELS` pixels and interpolated to the
+pixels between, within the image's segments (the ratio changes slowly across a surface, and
+jumps at a silhouette).
 
 The segments after a surface get a ``diffuse_bounce`` ratio of the same kind, averaged over
 the directions they leave in, each direction's sums weighted by how much it sends toward the
@@ -50,10 +51,11 @@ import numpy as np
 
 from ..medium import NUMPY
 from ..nonuniform import RAY_REACH_M, NonUniformHaze
-from .diffuse_table import TableGrid, direction_bins, phase_matrix
+from .diffuse_table import TableGrid, phase_matrix
 from .passes import GeometryPass
 from .photon_sources import emitter_photons
 from .photon_tracer import SeaReflectance
+from .segment_smooth import segments, smooth_within_segments
 from .strip_tracer import Strip, StripFluence, trace_strip
 
 CELL_M = 120.0
@@ -76,6 +78,13 @@ BOUNCE_RAYS = 32
 """Reflected rays per sea pixel (the sea's own samples for the pixel's incidence)."""
 RATIO_GRID_PIXELS = 160 * 90
 """Most pixels whose ratios are summed (every ``n``-th row and column)."""
+SMOOTHING_CELLS = 4
+"""Radius of the box filter (in cells of the ratios' grid, within each segment of the image)
+over the summed ratios. Neighbouring rays cross the same few strip cells at nearby points, so
+the cells' photon noise runs in bands across the sky, a few grid rows apart and 1–2 % deep
+in 8-bit values at 2^18 photons; this radius (1/40 of the grid's width) flattens them, and
+the ratio itself changes little over it (it is an integral along each ray of a field that
+changes over hundreds of metres)."""
 _LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 """Rec. 709 luminance: one ratio per level scales all three channels."""
 
@@ -141,7 +150,8 @@ def diffuse_ratios(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(L, H, W) each pixel's ``diffuse_air`` and ``diffuse_bounce`` ratios (module docstring)
     at levels of (green) extinction ``sigma`` (L,) in 1/m, from the strip's fluences, the
-    pixels' ``view`` ratios (H, W) and the sea's reflection samples."""
+    pixels' ``view`` ratios (H, W) and the sea's reflection samples; summed on a grid and
+    spread within the image's segments (:func:`spread_within_segments`)."""
     height, width = view.shape
     step = max(1, math.ceil(math.sqrt(height * width / RATIO_GRID_PIXELS)))
     rows, cols = np.arange(0, height, step), np.arange(0, width, step)
@@ -165,12 +175,47 @@ def diffuse_ratios(
         points = origin + distance[on_vessel, None] * dirs[on_vessel]
         bounce[:, on_vessel] = hull_bounce_ratios(medium, sources, sigma, points, dirs[on_vessel])
     shape = (len(sigma), len(rows), len(cols))
+    labels = segments(geometry.instance, geometry.distance_m)
+    grid_labels = labels[::step, ::step]
 
-    def spread(grid: np.ndarray) -> np.ndarray:
-        grid = grid.reshape(shape)
-        return np.repeat(np.repeat(grid, step, -2), step, -1)[..., :height, :width]
+    def smoothed(ratios: np.ndarray) -> np.ndarray:
+        cube = ratios.reshape(shape).transpose(1, 2, 0)
+        cube = smooth_within_segments(cube, grid_labels, SMOOTHING_CELLS)
+        return cube.transpose(2, 0, 1).astype(np.float64)
 
-    return spread(air), spread(bounce)
+    return tuple(spread_within_segments(smoothed(r), labels, step) for r in (air, bounce))
+
+
+def spread_within_segments(grid: np.ndarray, labels: np.ndarray, step: int) -> np.ndarray:
+    """(L, H, W) values at every pixel from ``grid`` (L, h, w), the values at every
+    ``step``-th row and column: bilinear between the four grid pixels around each pixel, of
+    those in its own segment (``labels`` (H, W): the sky, the sea, each vessel), so a ratio
+    never crosses a silhouette; the nearest grid pixel where none of the four is of its
+    segment (a vessel narrower than the grid's step)."""
+    height, width = labels.shape
+    rows, cols = _corners(height, step, grid.shape[1]), _corners(width, step, grid.shape[2])
+    grid_labels = labels[::step, ::step]
+    total = np.zeros((len(grid), height, width))
+    weight = np.zeros((height, width))
+    for i, wy in rows:
+        for j, wx in cols:
+            w = np.outer(wy, wx) * (grid_labels[np.ix_(i, j)] == labels)
+            total += w * grid[:, i][:, :, j]
+            weight += w
+    nearest = np.repeat(np.repeat(grid, step, -2), step, -1)[..., :height, :width]
+    found = weight > 0.0
+    return np.where(found, total / np.where(found, weight, 1.0), nearest)
+
+
+def _corners(n: int, step: int, n_grid: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """For pixels ``0 … n−1`` along one axis, the grid index below and above each with its
+    linear weight (grid index ``k`` is pixel ``k·step``)."""
+    at = np.arange(n) / step
+    below = np.minimum(np.floor(at).astype(np.int64), n_grid - 1)
+    above = np.minimum(below + 1, n_grid - 1)
+    frac = np.clip(at - below, 0.0, 1.0)
+    frac = np.where(above == below, 0.0, frac)
+    return [(below, 1.0 - frac), (above, frac)]
 
 
 def sea_bounce_ratios(
@@ -326,14 +371,15 @@ def ray_sums(
     rho = medium.density_at(p[..., 0], p[..., 1], z) * width
     rho_v = np.asarray(medium.profile.density(z, NUMPY), np.float64) * width
     s_cell, z_cell = _cells(medium, strip, p[..., 0], p[..., 1], z)
-    node = _node(strip, -dirs)[:, None]
+    nodes = _nodes(strip, -dirs)
+    cell = s_cell * strip.n_z + z_cell
     mass = np.cumsum(rho, 1) - 0.5 * rho
     mass_v = (np.cumsum(rho_v, 1) - 0.5 * rho_v) * ratio[:, None]
     true = np.empty((len(sigma), len(dirs)))
     equivalent = np.empty_like(true)
     for k, level in enumerate(sigma):
-        j_bank = sources.bank[k][s_cell * strip.n_z + z_cell, node]
-        j_flat = sources.profile[k][z_cell, node]
+        j_bank = sum(w[:, None] * sources.bank[k][cell, n[:, None]] for n, w in nodes)
+        j_flat = sum(w[:, None] * sources.profile[k][z_cell, n[:, None]] for n, w in nodes)
         true[k] = np.sum(np.exp(-level * mass) * rho * j_bank, 1)
         equivalent[k] = np.sum(np.exp(-level * mass_v) * rho_v * j_flat, 1) * ratio
     return true, equivalent
@@ -350,9 +396,26 @@ def _cells(medium: NonUniformHaze, strip: Strip, x: Any, y: Any, z: Any):
     return i_s.astype(np.int64), i_z.astype(np.int64)
 
 
-def _node(strip: Strip, travel: np.ndarray) -> np.ndarray:
-    """The strip's direction bin of travel directions (N, 3): azimuths from the bank's normal."""
-    mu, phi = direction_bins(
-        travel, math.radians(strip.toward_deg), strip.n_mu, strip.n_phi, folded=False
-    )
-    return mu * strip.n_phi + phi
+def _nodes(strip: Strip, travel: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The four direction bins around travel directions (N, 3), as (bin, bilinear weight)
+    pairs between the bins' centres in ``μ`` and in the azimuth from the bank's normal (which
+    wraps around): the in-scattered light changes smoothly with the ray's direction, not in
+    steps of a bin (steps that would show as seams across the sky)."""
+    mu = (travel[:, 2] + 1.0) * 0.5 * strip.n_mu - 0.5
+    az = math.radians(strip.toward_deg)
+    along = travel[:, 0] * math.cos(az) + travel[:, 1] * math.sin(az)
+    across = travel[:, 1] * math.cos(az) - travel[:, 0] * math.sin(az)
+    phi = (np.arctan2(across, along) + np.pi) / (2.0 * np.pi) * strip.n_phi - 0.5
+    mu0 = np.floor(mu)
+    mu_w = np.clip(mu - mu0, 0.0, 1.0)
+    mu_lo = np.clip(mu0, 0, strip.n_mu - 1).astype(np.int64)
+    mu_hi = np.clip(mu0 + 1, 0, strip.n_mu - 1).astype(np.int64)
+    phi0 = np.floor(phi)
+    phi_w = phi - phi0
+    phi_lo = np.mod(phi0, strip.n_phi).astype(np.int64)
+    phi_hi = np.mod(phi0 + 1, strip.n_phi).astype(np.int64)
+    return [
+        (m * strip.n_phi + f, wm * wf)
+        for m, wm in ((mu_lo, 1.0 - mu_w), (mu_hi, mu_w))
+        for f, wf in ((phi_lo, 1.0 - phi_w), (phi_hi, phi_w))
+    ]
