@@ -7,8 +7,8 @@ own): its patches, a bank instead (edge 900 m ahead, edge scale 80 m, near ratio
 uniform haze (no patches). Each process renders the set twice and reports the second (warm:
 its kernels compiled) and its peak resident memory; for the varying haze also the time of the
 pixels' ratios alone (``PhysicalRenderer.pixel_ratios``: the view's quadrature, which the
-``transmission/`` maps share, and the sun's depths). All in one run, so the ratios compare
-like with like.
+``transmission/`` maps share, the sun's depths and, in a bank, its own diffuse field). All in
+one run, so the ratios compare like with like.
 
 Usage: python scripts/bench_pixel_density.py [--res 1280x720] [--spp 42] [--doc]
 """
@@ -72,7 +72,10 @@ def child(case: str, res: tuple[int, int], spp: int) -> dict:
         renderer = PhysicalRenderer(session.loaded, spec, geometry=session.pixels)
         start = time.perf_counter()
         sigma = [extinction_coefficient(v) for v in GRADED_LEVELS_M]
-        renderer.pixel_ratios(np.asarray(sigma))
+        # As the render asks for them: a bank's own field traced with the tables' photons.
+        settings = renderer.settings
+        photons = settings.bank_photons_for(settings.photons_for(res[0] * res[1] * spp))
+        renderer.pixel_ratios(np.asarray(sigma), spec.render.seed, photons)
         ratios = time.perf_counter() - start
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # KiB -> GiB
     return {"case": case, "warm_s": warm, "ratios_s": ratios, "peak_gib": peak}
@@ -87,7 +90,8 @@ def section(rows: list[dict], res: tuple[int, int], spp: int) -> list[str]:
         f"`scenes/patchy.yaml` in `physical`, {res[0]}×{res[1]}, {spp} spp, clean + 11 "
         "graded levels, warm (second render in its process); the ratios' share is the pixels' "
         "density ratios alone (the view's quadrature, shared with the `transmission/` maps, "
-        "and the sun's depths). One run; each case in its own process.",
+        "the sun's depths and, in the bank, its own diffuse field traced with the tables' "
+        "photons). One run; each case in its own process.",
         "",
         "| haze | 12 images (s) | / uniform | ratios (s) | peak memory (GiB) |",
         "|---|---|---|---|---|",

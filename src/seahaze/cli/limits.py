@@ -90,6 +90,11 @@ FIELD_BYTES = 0.3 * 2**30
 above uniform haze at 1280×720, docs/benchmarks.md, "What the physical mode's equivalent
 profiles cost")."""
 
+BANK_PHOTON_S = 1.8e-06
+"""Wall seconds per photon and level of a fog bank's own diffuse field in ``physical``: its
+strip traced and the ratios' grid summed (1.5–2.4 s per level for 2^20 photons on this
+machine, docs/benchmarks.md, "How close is physical in a fog bank?")."""
+
 VALIDATED_FROM_M = {"physical": 100.0}
 """Thinnest visibility (m) down to which the mode is within 3 % of converged ``reference``
 renders in every region (docs/physics.md, "Validated range"; docs/benchmarks.md): ``physical``
@@ -105,9 +110,10 @@ across the sea in the physical mode")."""
 BANK_VALIDATED_FROM_M = {"physical": 300.0}
 """The same in a fog bank (``haze.bank``), within 3 %: ``physical`` gives a bank the diffuse
 light of its own field, traced through a strip across its edge (``render/bank_diffuse.py``);
-every region within 2 % of the ``reference`` at 300, 1000 and 4000 m (the mean of four renders;
-one render's region means scatter by 2–3 % more, the bank's photon noise; docs/physics.md,
-"Haze that varies across the sea in the physical mode"). Not measured below 300 m."""
+every region of two banks within 2 % of the ``reference`` at 300, 1000 and 4000 m (the mean of
+four renders; one render's region error scatters about it by 0.3–2.9 % at 1000–4000 m and
+2.4–4.8 % at 300 m, 1σ: the bank's photon noise; docs/physics.md, "A fog bank's own diffuse
+field"). Not measured below 300 m."""
 
 # measured by scripts/measure_estimates.py (docs/limits.md, "The estimate"); bytes, wall seconds
 BASE_BYTES = {"physical": 6.34e08, "reference": 5.03e08, "asm": 4.68e08}
@@ -225,6 +231,10 @@ def scene_core_seconds(spec: SceneSpec) -> tuple[float, float]:
         # The tables were timed at the fewest photons; larger passes trace more.
         photons = settings.photons_for(pixels * spp) / settings.min_table_photons
         tables = photons * sum(_interpolated(PHYSICAL_TABLE_S, v) for v in levels)
+        if spec.haze.bank is not None and spec.haze.patches is None:
+            # A bank alone gets its own diffuse field, traced per level (render/bank_diffuse).
+            strip = settings.bank_photons_for(settings.photons_for(pixels * spp))
+            tables += len(levels) * strip * BANK_PHOTON_S
         return serial, parallel + tables
     parallel = pixels * spp * CLEAN_CORE_S
     # Delta tracking samples at the field's bound: patches whose density spans R cost about

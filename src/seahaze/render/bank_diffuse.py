@@ -55,7 +55,7 @@ from .diffuse_table import TableGrid, phase_matrix
 from .passes import GeometryPass
 from .photon_sources import emitter_photons
 from .photon_tracer import SeaReflectance
-from .segment_smooth import segments, smooth_within_segments
+from .segment_smooth import SEA_SEGMENT, segments, smooth_within_segments
 from .strip_tracer import Strip, StripFluence, trace_strip
 
 CELL_M = 120.0
@@ -76,6 +76,11 @@ BOUNCE_POINTS = 48
 """Points of each of a sea pixel's reflected rays."""
 BOUNCE_RAYS = 32
 """Reflected rays per sea pixel (the sea's own samples for the pixel's incidence)."""
+SEA_STRIDE = 2
+"""The sea's ``diffuse_bounce`` is summed on every this-many-th row and column of the ratios'
+grid and interpolated within the sea between (its rays are most of the ratios' time)."""
+BOUNCE_CHUNK = 2048
+"""Sea points whose reflected rays are summed at once (their points are held in memory)."""
 RATIO_GRID_PIXELS = 160 * 90
 """Most pixels whose ratios are summed (every ``n``-th row and column)."""
 SMOOTHING_CELLS = 4
@@ -165,18 +170,25 @@ def diffuse_ratios(
         medium, sources, sigma, starts, dirs, _reach(medium, starts, dirs, distance), r
     )
     air = _quotient(true, equivalent)
-    bounce = np.ones_like(air)
-    on_sea = np.isfinite(distance) & (geometry.instance[rows][:, cols].reshape(-1) < 0)
-    if on_sea.any():
-        points = origin + distance[on_sea, None] * dirs[on_sea]
-        bounce[:, on_sea] = sea_bounce_ratios(medium, sources, sigma, points, dirs[on_sea], sea)
-    on_vessel = np.isfinite(distance) & ~on_sea
-    if on_vessel.any():
-        points = origin + distance[on_vessel, None] * dirs[on_vessel]
-        bounce[:, on_vessel] = hull_bounce_ratios(medium, sources, sigma, points, dirs[on_vessel])
     shape = (len(sigma), len(rows), len(cols))
     labels = segments(geometry.instance, geometry.distance_m)
     grid_labels = labels[::step, ::step]
+    bounce = np.ones_like(air)
+    on_vessel = grid_labels.reshape(-1) >= 0
+    if on_vessel.any():
+        points = origin + distance[on_vessel, None] * dirs[on_vessel]
+        bounce[:, on_vessel] = hull_bounce_ratios(medium, sources, sigma, points, dirs[on_vessel])
+    on_sea = grid_labels.reshape(-1) == SEA_SEGMENT
+    if on_sea.any():
+        # On every SEA_STRIDE-th grid row and column, interpolated within the sea between.
+        sparse = np.zeros(shape[1:], bool)
+        sparse[::SEA_STRIDE, ::SEA_STRIDE] = True
+        sparse = sparse.reshape(-1) & on_sea
+        points = origin + distance[sparse, None] * dirs[sparse]
+        bounce[:, sparse] = sea_bounce_ratios(medium, sources, sigma, points, dirs[sparse], sea)
+        coarse = bounce.reshape(shape)[:, ::SEA_STRIDE, ::SEA_STRIDE]
+        between = spread_within_segments(coarse, grid_labels, SEA_STRIDE).reshape(len(sigma), -1)
+        bounce[:, on_sea & ~sparse] = between[:, on_sea & ~sparse]
 
     def smoothed(ratios: np.ndarray) -> np.ndarray:
         cube = ratios.reshape(shape).transpose(1, 2, 0)
@@ -230,6 +242,22 @@ def sea_bounce_ratios(
     directions ``dirs`` (N, 3): the diffuse in-scattering along :data:`BOUNCE_RAYS` of the
     sea's reflected directions (its own samples for that incidence, each weighted by its
     luminance) through the bank, over the same along each in its own equivalent profile."""
+    if len(points) > BOUNCE_CHUNK:
+        parts = range(0, len(points), BOUNCE_CHUNK)
+        return np.concatenate(
+            [
+                sea_bounce_ratios(
+                    medium,
+                    sources,
+                    sigma,
+                    points[i : i + BOUNCE_CHUNK],
+                    dirs[i : i + BOUNCE_CHUNK],
+                    sea,
+                )
+                for i in parts
+            ],
+            axis=1,
+        )
     wo, weight = reflected_directions(sea, dirs)
     n, k = wo.shape[:2]
     starts = np.repeat(points, k, axis=0)

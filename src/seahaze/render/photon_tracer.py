@@ -195,12 +195,7 @@ def trace_fluence(
         )
         z = dr.select(collide, z_end, 0.0)
         active &= collide | at_sea
-        # Russian roulette keeps the expectation: survivors below the floor are lifted to it.
-        wmax = dr.maximum(dr.maximum(w[0], w[1]), w[2])
-        low = wmax < WEIGHT_FLOOR
-        survive = ~low | (u[4] * WEIGHT_FLOOR < wmax)
-        lift = WEIGHT_FLOOR / dr.maximum(wmax, 1e-30)
-        w = tuple(dr.select(low & survive, c * lift, c) for c in w)
+        w, survive = russian_roulette(w, u[4])
         flights += 1
         # A photon exactly horizontal cannot leave: vanishingly rare.
         active &= survive & (d[2] != 0.0) & (flights < MAX_FLIGHTS)
@@ -211,6 +206,20 @@ def trace_fluence(
     dr.sync_thread()  # wait with Python's lock let go: Ctrl-C's watcher (seahaze.interrupts)
     sums = np.array(tally).reshape(n_levels, slab.n_z, slab.n_dir, CELL)
     return _fluence(sums[..., 0:3], sums[..., 4:7], slab) * scale
+
+
+def russian_roulette(w: tuple, u: object) -> tuple[tuple, object]:
+    """Photon weights ``w`` (R, G, B drjit Floats, normalised) after Russian roulette with
+    uniform ``u``, and whether each photon survives: a photon below :data:`WEIGHT_FLOOR`
+    survives with probability weight / floor and is lifted to the floor (the expectation is
+    kept)."""
+    import drjit as dr
+
+    wmax = dr.maximum(dr.maximum(w[0], w[1]), w[2])
+    low = wmax < WEIGHT_FLOOR
+    survive = ~low | (u * WEIGHT_FLOOR < wmax)
+    lift = WEIGHT_FLOOR / dr.maximum(wmax, 1e-30)
+    return tuple(dr.select(low & survive, c * lift, c) for c in w), survive
 
 
 def _nonempty(d: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

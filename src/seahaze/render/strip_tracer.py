@@ -42,7 +42,13 @@ import numpy as np
 from ..medium import HazeMedium, drjit_ops
 from . import jit_haze
 from .field_medium import bank_step, profile_bound
-from .photon_tracer import FIXED_POINT, MAX_FLIGHTS, WEIGHT_FLOOR, SeaReflectance, SeaTables
+from .photon_tracer import (
+    FIXED_POINT,
+    MAX_FLIGHTS,
+    SeaReflectance,
+    SeaTables,
+    russian_roulette,
+)
 
 TRACK_POINTS = 4
 """Stratified points per flight at which its track length is tallied."""
@@ -188,12 +194,7 @@ def trace_strip(
         direct &= ~(real | at_sea)
         inside = (s_end > p.leave_lo) & (s_end < p.leave_hi)
         active &= (collide | at_sea) & inside
-        # Russian roulette keeps the expectation: survivors below the floor are lifted to it.
-        wmax = dr.maximum(dr.maximum(w[0], w[1]), w[2])
-        low = wmax < WEIGHT_FLOOR
-        survive = ~low | (u[5] * WEIGHT_FLOOR < wmax)
-        lift = WEIGHT_FLOOR / dr.maximum(wmax, 1e-30)
-        w = tuple(dr.select(low & survive, c * lift, c) for c in w)
+        w, survive = russian_roulette(w, u[5])
         flights += 1
         active &= survive & (d[2] != 0.0) & (flights < MAX_FLIGHTS)
         return (s_end, z, *d, *w, direct, active, flights, rng)
