@@ -90,10 +90,11 @@ FIELD_BYTES = 0.3 * 2**30
 above uniform haze at 1280×720, docs/benchmarks.md, "What the physical mode's equivalent
 profiles cost")."""
 
-BANK_PHOTON_S = 1.8e-06
+BANK_PHOTON_S = 1.2e-06
 """Wall seconds per photon and level of a fog bank's own diffuse field in ``physical``: its
-strip traced and the ratios' grid summed (1.5–2.4 s per level for 2^20 photons on this
-machine, docs/benchmarks.md, "How close is physical in a fog bank?")."""
+strip traced and the ratios' grid summed (0.7–1.8 s per level for 2^20 photons on this
+machine, the first of a process compiling the strip's kernel; docs/benchmarks.md, "How close
+is physical in a fog bank?")."""
 
 VALIDATED_FROM_M = {"physical": 100.0}
 """Thinnest visibility (m) down to which the mode is within 3 % of converged ``reference``
