@@ -10,7 +10,9 @@
 * The same seed gives the same bytes.
 * ``diffuse_air``: a diffuse field that is the same everywhere gives every ray the ratio 1
   whatever the bank does to the ray (``∫ e^{−τ} σρ ds = 1 − e^{−σℓ}`` in both), and a bank
-  field twice the profile's gives 2.
+  field twice the profile's gives 2; a field that steps at the edge gives a ray the closed
+  form of its sum where the drift has carried the edge.
+* The ratios' grid spreads to the pixels bilinearly within a segment, never across one.
 """
 
 from __future__ import annotations
@@ -179,3 +181,31 @@ def test_ratios_spread_bilinearly_within_a_segment_and_never_across_one():
     two = np.where(labels[::step, ::step] == 0, 5.0, 1.0)[None]
     spread = spread_within_segments(two, labels, step)[0]
     np.testing.assert_array_equal(spread, np.where(labels == 0, 5.0, 1.0))
+
+
+def test_a_ray_reads_the_bank_field_where_the_drifted_bank_has_moved_it():
+    """A bank of uniform density (near ratio 1) whose field doubles past the edge: a
+    horizontal ray's sum is the closed form of ``∫ e^{−σct} σc J(t) dt`` with ``J`` stepping
+    where the ray crosses the edge, wherever the drift has carried the edge (1.2 km here)."""
+    from seahaze.render.bank_diffuse import SourceTables, bank_strip, ray_sums
+
+    drift = Drift(speed_m_s=30.0, toward_deg=180.0, time_s=40.0)  # the edge 1200 m nearer
+    bank = Bank(2500.0, 0.0, 80.0, 1.0)
+    medium = NonUniformHaze(SLAB, HazeField(bank=bank, drift=drift), 1.1)
+    strip = bank_strip(medium, (0.0, 0.0))
+    edges = strip.s_lo + (strip.s_hi - strip.s_lo) * np.arange(strip.n_s + 1) / strip.n_s
+    centres = 0.5 * (edges[:-1] + edges[1:])
+    past = np.repeat(centres >= 0.0, strip.n_z)  # cells past the edge, as (s, z) rows
+    cells = np.where(past[None, :, None], 2.0, 1.0) * np.ones((1, 1, strip.n_dir))
+    heights = np.ones((1, strip.n_z, strip.n_dir))
+    sources = SourceTables(strip, cells, heights)
+    sigma, reach = 3.912 / 4000.0, 6000.0
+    origin, ray = np.array([0.0, 0.0, 15.0]), np.array([[1.0, 0.0, 0.0]])
+    true, _ = ray_sums(
+        medium, sources, np.array([sigma]), origin[None], ray, np.array([reach]), np.ones(1)
+    )
+    # The step lies on the cells' boundary nearest the edge, 1300 m ahead after the drift.
+    step_at = edges[np.argmin(np.abs(edges))] + bank.distance_m - 1200.0
+    k = sigma * medium.scale
+    want = (1.0 - np.exp(-k * step_at)) + 2.0 * (np.exp(-k * step_at) - np.exp(-k * reach))
+    np.testing.assert_allclose(true[0, 0] * sigma, want, rtol=5e-3)
