@@ -92,7 +92,7 @@ profiles cost")."""
 
 BANK_PHOTON_S = 1.2e-06
 """Wall seconds per photon and level of a fog bank's own diffuse field in ``physical``: its
-strip traced and the ratios' grid summed (0.7–1.8 s per level for 2^20 photons on this
+strip traced and the ratios' grid summed (0.7–1.7 s per level for 2^20 photons on this
 machine, the first of a process compiling the strip's kernel; docs/benchmarks.md, "How close
 is physical in a fog bank?")."""
 
@@ -111,9 +111,9 @@ across the sea in the physical mode")."""
 BANK_VALIDATED_FROM_M = {"physical": 300.0}
 """The same in a fog bank (``haze.bank``), within 3 %: ``physical`` gives a bank the diffuse
 light of its own field, traced through a strip across its edge (``render/bank_diffuse.py``);
-every region of two banks within 2 % of the ``reference`` at 300, 1000 and 4000 m (the mean of
-four renders; one render's region error scatters about it by 0.3–2.9 % at 1000–4000 m and
-2.4–4.8 % at 300 m, 1σ: the bank's photon noise; docs/physics.md, "A fog bank's own diffuse
+every region of two banks within 2.8 % of the ``reference`` at 300, 1000 and 4000 m (the mean
+of four renders; one render's region error scatters about it by 0.4–2.8 % at 1000–4000 m and
+1.1–3.5 % at 300 m, 1σ: the bank's photon noise; docs/physics.md, "A fog bank's own diffuse
 field"). Not measured below 300 m."""
 
 # measured by scripts/measure_estimates.py (docs/limits.md, "The estimate"); bytes, wall seconds
