@@ -13,6 +13,8 @@
   field twice the profile's gives 2; a field that steps at the edge gives a ray the closed
   form of its sum where the drift has carried the edge.
 * The ratios' grid spreads to the pixels bilinearly within a segment, never across one.
+* The sea's pre-drawn samples come out in each arriving ray's vertical plane; the renderer
+  gives a bank alone its diffuse ratios (1 after open sky), and patches none.
 """
 
 from __future__ import annotations
@@ -209,3 +211,62 @@ def test_a_ray_reads_the_bank_field_where_the_drifted_bank_has_moved_it():
     k = sigma * medium.scale
     want = (1.0 - np.exp(-k * step_at)) + 2.0 * (np.exp(-k * step_at) - np.exp(-k * reach))
     np.testing.assert_allclose(true[0, 0] * sigma, want, rtol=5e-3)
+
+
+def test_sea_samples_keep_the_plane_of_incidence_and_one_pick_per_column():
+    """The sea's pre-drawn samples (in the plane of incidence) come out in each arriving
+    direction's own vertical plane, and an (N, K) pick is K columns of (N,) picks."""
+    from seahaze.render.photon_tracer import SeaReflectance
+
+    rng = np.random.default_rng(5)
+    wo = np.stack(
+        [np.cos(np.linspace(0.1, 1.4, 6)), np.zeros(6), np.sin(np.linspace(0.1, 1.4, 6))], 1
+    )
+    sea = SeaReflectance(np.broadcast_to(wo, (4, 6, 3)).copy(), rng.random((4, 6, 3)))
+    d = rng.normal(size=(7, 3))
+    d[:, 2] = -np.abs(d[:, 2])
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    pick = rng.integers(0, 6, (7, 3))
+    out, weight = sea.samples(d, pick)
+    for j in range(3):
+        column = sea.samples(d, pick[:, j])
+        np.testing.assert_array_equal(out[:, j], column[0])
+        np.testing.assert_array_equal(weight[:, j], column[1])
+    # Horizontal parts parallel to the arriving direction's, elevations the samples' own.
+    cross = out[..., 0] * d[:, None, 1] - out[..., 1] * d[:, None, 0]
+    np.testing.assert_allclose(cross, 0.0, atol=1e-12)
+    assert np.all(out[..., 0] * d[:, None, 0] + out[..., 1] * d[:, None, 1] > 0.0)
+    np.testing.assert_allclose(out[..., 2], wo[pick, 2], rtol=1e-12)
+
+
+def test_the_renderer_gives_a_bank_alone_its_diffuse_ratios_and_patches_none():
+    from conftest import small_spec
+    from seahaze.haze_field import Patches
+    from seahaze.render.engine import open_session
+    from seahaze.render.physical import PhysicalRenderer
+
+    spec = small_spec(
+        camera={"height_m": 12.0, "pitch_deg": -1.0, "fov_deg": 50.0},
+        vessels={"placed": [{"class": "tug", "distance_m": 300, "bearing_deg": 4}]},
+        haze={"top_m": 300.0, "levels": [800.0]},
+        render={"mode": "physical", "spp": 4, "seed": 3},
+    )
+    sigma = np.array([3.912 / 800.0, 3.912 / 300.0])
+    bank = HazeField(bank=Bank(600.0, 0.0, 80.0, 0.2))
+    for field, has in (
+        (bank, True),
+        (HazeField(patches=Patches(300.0, 3.0, 60.0, 5.0, seed=5)), False),
+    ):
+        session = open_session(spec, medium=NonUniformHaze(SLAB, field, 1.0))
+        renderer = PhysicalRenderer(session.loaded, spec, geometry=session.pixels)
+        ratios = renderer.pixel_ratios(sigma, 1)
+        if not has:
+            assert ratios.diffuse_air is None and ratios.diffuse_bounce is None
+            continue
+        for ratio in (ratios.diffuse_air, ratios.diffuse_bounce):
+            assert ratio.shape == (2, *session.pixels.distance_m.shape)
+            assert np.all(np.isfinite(ratio)) and np.all(ratio > 0.0)
+        sky = ~np.isfinite(session.pixels.distance_m)
+        # Open sky has no later segment; the sea's do not stay the tables' light.
+        np.testing.assert_array_equal(ratios.diffuse_bounce[:, sky], 1.0)
+        assert np.ptp(ratios.diffuse_bounce[:, ~sky]) > 0.0

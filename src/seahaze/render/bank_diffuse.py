@@ -55,6 +55,7 @@ from .diffuse_table import TableGrid, phase_matrix
 from .passes import GeometryPass
 from .photon_sources import emitter_photons
 from .photon_tracer import SeaReflectance
+from .pixel_density import ray_ratio
 from .segment_smooth import SEA_SEGMENT, segments, smooth_within_segments
 from .strip_tracer import Strip, StripFluence, trace_strip
 
@@ -264,7 +265,7 @@ def sea_bounce_ratios(
     starts[:, 2] = np.maximum(starts[:, 2], 0.0)
     travel = wo.reshape(-1, 3)
     reach = _reach(medium, starts, travel, np.full(len(travel), np.inf))
-    own = segment_ratio(medium, starts, travel, reach)
+    own = ray_ratio(medium, starts, travel, reach)
     true, equivalent = ray_sums(medium, sources, sigma, starts, travel, reach, own, BOUNCE_POINTS)
     w = weight.reshape(1, n, k)
     return _quotient(
@@ -289,7 +290,7 @@ def hull_bounce_ratios(
     travel = travel.reshape(-1, 3)
     to_sea = np.where(travel[:, 2] < 0.0, starts[:, 2] / np.maximum(-travel[:, 2], 1e-9), np.inf)
     reach = _reach(medium, starts, travel, to_sea)
-    own = segment_ratio(medium, starts, travel, reach)
+    own = ray_ratio(medium, starts, travel, reach)
     true, equivalent = ray_sums(medium, sources, sigma, starts, travel, reach, own, BOUNCE_POINTS)
     return _quotient(true.reshape(-1, n, k).sum(axis=2), equivalent.reshape(-1, n, k).sum(axis=2))
 
@@ -316,28 +317,8 @@ def reflected_directions(sea: SeaReflectance, dirs: np.ndarray) -> tuple[np.ndar
     rotated to its ray's azimuth (as the photon tracer does)."""
     k = min(BOUNCE_RAYS, sea.per_bin)
     pick = ((np.arange(k) + 0.5) * sea.per_bin / k).astype(np.int64)
-    mu_bin = np.clip((-dirs[:, 2] * sea.n_mu).astype(np.int64), 0, sea.n_mu - 1)
-    wo = sea.wo[mu_bin][:, pick]
-    weight = sea.weight[mu_bin][:, pick] @ _LUMINANCE
-    horizontal = np.hypot(dirs[:, 0], dirs[:, 1])
-    c = np.where(horizontal > 0, dirs[:, 0] / np.maximum(horizontal, 1e-300), 1.0)[:, None]
-    s = np.where(horizontal > 0, dirs[:, 1] / np.maximum(horizontal, 1e-300), 0.0)[:, None]
-    turned = np.stack(
-        [c * wo[..., 0] - s * wo[..., 1], s * wo[..., 0] + c * wo[..., 1], wo[..., 2]], -1
-    )
-    return turned, weight
-
-
-def segment_ratio(
-    medium: NonUniformHaze, starts: np.ndarray, dirs: np.ndarray, reach: np.ndarray
-) -> np.ndarray:
-    """``ℓ_field / ℓ_profile`` of rays over ``reach`` metres (1 where the profile has no
-    haze): what the kernels' own later-segment ratio measures (``segment_ratio``)."""
-    field = medium.lengths_along(starts, dirs, np.zeros(len(dirs)), reach)
-    _, profile = medium.profile.reduced_length(starts[:, 2], dirs[:, 2], reach, NUMPY)
-    profile = np.asarray(profile, np.float64)
-    thin = profile < 1e-6
-    return np.where(thin, 1.0, field / np.where(thin, 1.0, profile))
+    wo, weight = sea.samples(dirs, np.broadcast_to(pick, (len(dirs), k)))
+    return wo, weight @ _LUMINANCE
 
 
 def _reach(medium: NonUniformHaze, starts: np.ndarray, dirs: np.ndarray, distance: np.ndarray):

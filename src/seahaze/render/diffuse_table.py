@@ -44,7 +44,7 @@ import numpy as np
 
 from ..haze import hg_phase
 from ..medium import HazeMedium
-from .photon_tracer import SeaReflectance, Slab, trace_fluence
+from .photon_tracer import SeaReflectance, Slab, downward_photons, trace_fluence
 
 
 @dataclass(frozen=True)
@@ -161,7 +161,7 @@ def build_tables(
     sigmas = [float(x) for x in sigmas]
     if any(x <= 0.0 for x in sigmas):
         raise ValueError(f"the diffuse table needs haze (sigma > 0), got {sigmas}")
-    sun, sky = _downward(*sun), _downward(*sky)
+    sun, sky = downward_photons(*sun), downward_photons(*sky)
     slab = Slab(top_m, albedo, g, sun_azimuth_rad, grid.n_z, grid.n_mu, grid.n_phi, grid.folded)
     fluence = trace_fluence(sun, sky, sea, sigmas, slab, seed)
     p = phase_matrix(float(g), grid)
@@ -184,11 +184,3 @@ def _in_scattered(
     j = albedo * sigma * (p @ stacked).reshape(n_dir, n_z, 3).transpose(1, 0, 2)
     values = j.reshape(grid.n_z, grid.n_mu, grid.n_phi, 3).astype(np.float32)
     return np.maximum(values, 0.0)
-
-
-def _downward(d: np.ndarray, w: np.ndarray) -> Photons:
-    """The photons that travel down and carry energy (the sky below the horizon has none)."""
-    d = np.asarray(d, dtype=np.float64)
-    w = np.asarray(w, dtype=np.float64)
-    keep = (d[:, 2] < -1e-6) & (w.max(axis=1) > 0)
-    return d[keep], w[keep]

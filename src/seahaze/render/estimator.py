@@ -95,7 +95,7 @@ class EstimatorSettings:
         ``table_photons`` each: :attr:`bank_photons` if set, else the same number (at least
         :attr:`min_table_photons`). The bank's tally has forty-odd cells across the edge for
         each of the table's heights, but its ratio is summed along rays through them
-        (docs/benchmarks.md, "What a fog bank's own diffuse field costs")."""
+        (docs/benchmarks.md, "How close is physical in a fog bank?")."""
         if self.bank_photons is not None:
             return self.bank_photons
         return max(table_photons, self.min_table_photons)

@@ -81,12 +81,20 @@ class SeaReflectance:
         (numpy; the tracer does the same in drjit). A photon takes a random pre-drawn outgoing
         direction of its incidence bin, rotated to its own azimuth — exact for an isotropic
         BSDF up to the binning of the incidence angle."""
+        return self.samples(d, rng.integers(0, self.per_bin, len(d)))
+
+    def samples(self, d: np.ndarray, pick: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Outgoing travel directions and RGB weights (``pick``'s shape, then 3) of the
+        pre-drawn samples ``pick`` ((N,) or (N, K) indices) of the incidence bins of downward
+        travel directions ``d`` (N, 3), rotated to each direction's azimuth (numpy)."""
         mu_bin = np.clip((-d[:, 2] * self.n_mu).astype(np.int64), 0, self.n_mu - 1)
-        pick = rng.integers(0, self.per_bin, len(d))
+        mu_bin = mu_bin.reshape(-1, *([1] * (pick.ndim - 1)))
         wo = self.wo[mu_bin, pick]
-        azimuth = np.arctan2(d[:, 1], d[:, 0])
+        azimuth = np.arctan2(d[:, 1], d[:, 0]).reshape(mu_bin.shape)
         c, s = np.cos(azimuth), np.sin(azimuth)
-        out = np.stack([c * wo[:, 0] - s * wo[:, 1], s * wo[:, 0] + c * wo[:, 1], wo[:, 2]], axis=1)
+        out = np.stack(
+            [c * wo[..., 0] - s * wo[..., 1], s * wo[..., 0] + c * wo[..., 1], wo[..., 2]], -1
+        )
         return out, self.weight[mu_bin, pick]
 
 
@@ -220,6 +228,15 @@ def russian_roulette(w: tuple, u: object) -> tuple[tuple, object]:
     survive = ~low | (u * WEIGHT_FLOOR < wmax)
     lift = WEIGHT_FLOOR / dr.maximum(wmax, 1e-30)
     return tuple(dr.select(low & survive, c * lift, c) for c in w), survive
+
+
+def downward_photons(d: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Of source photons (travel directions (n, 3), weights (n, 3)), those that travel down
+    and carry energy (the sky below the horizon has none), as float64."""
+    d = np.asarray(d, dtype=np.float64)
+    w = np.asarray(w, dtype=np.float64)
+    keep = (d[:, 2] < -1e-6) & (w.max(axis=1) > 0)
+    return d[keep], w[keep]
 
 
 def _nonempty(d: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

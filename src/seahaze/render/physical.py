@@ -228,7 +228,7 @@ class PhysicalRenderer:
     ) -> PixelRatios:
         """Each pixel's density ratios in the scene's field (:func:`pixel_ratios`) for levels
         of (green) extinction ``sigma`` (L,) in 1/m, from the geometry pass's pixel-centre rays
-        and the sun's direction; in a bank alone with the camera segment's ``diffuse_air``
+        and the sun's direction; in a bank alone with the ``diffuse_air`` and ``diffuse_bounce``
         ratios too (:mod:`seahaze.render.bank_diffuse`, its field traced from ``seed`` with
         ``bank_photons`` per level; None: the settings' for the fewest table photons). Kept
         for the frame's next render of the same levels and seed."""
@@ -256,13 +256,12 @@ class PhysicalRenderer:
         from . import bank_diffuse  # a Mitsuba variant is set by now
 
         assert self.field is not None and self.geometry is not None
-        field = self.field
         origin = (float(self.geometry.origin[0]), float(self.geometry.origin[1]))
         strip, fluence = bank_diffuse.trace_bank(
-            field, self.sun, self.sky, self.sea, sigma, origin, photons, seed
+            self.field, self.sun, self.sky, self.sea, sigma, origin, photons, seed
         )
         return bank_diffuse.diffuse_ratios(
-            field, self.geometry, ratios.view, strip, fluence, sigma, self.sea
+            self.field, self.geometry, ratios.view, strip, fluence, sigma, self.sea
         )
 
     def vessel_light(

@@ -239,11 +239,17 @@ def mirror_ratio(medium: NonUniformHaze, points: np.ndarray, dirs: np.ndarray) -
     """``ℓ_field / ℓ_profile`` (N,) of the rays from sea ``points`` (N, 3) along the camera
     rays ``dirs`` (N, 3) mirrored in a flat sea: where the light the sea reflects toward the
     camera travels, up to the medium's top or :data:`RAY_REACH_M`."""
-    profile = medium.profile
     up = dirs * np.array([1.0, 1.0, -1.0])
-    length = mirror_reach(medium, points, up)
-    _, profile_length = profile.reduced_length(points[:, 2], up[:, 2], length, NUMPY)
-    field_length = medium.lengths_along(points, up, np.zeros(len(points)), length)
+    return ray_ratio(medium, points, up, mirror_reach(medium, points, up))
+
+
+def ray_ratio(
+    medium: NonUniformHaze, starts: np.ndarray, dirs: np.ndarray, reach: np.ndarray
+) -> np.ndarray:
+    """``ℓ_field / ℓ_profile`` (N,) of the rays from ``starts`` (N, 3) along unit ``dirs``
+    (N, 3) over ``reach`` (N,) metres (1 where the profile gives them no haze)."""
+    _, profile_length = medium.profile.reduced_length(starts[:, 2], dirs[:, 2], reach, NUMPY)
+    field_length = medium.lengths_along(starts, dirs, np.zeros(len(starts)), reach)
     return _ratio(field_length, np.asarray(profile_length, np.float64))
 
 

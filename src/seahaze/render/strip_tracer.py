@@ -47,6 +47,7 @@ from .photon_tracer import (
     MAX_FLIGHTS,
     SeaReflectance,
     SeaTables,
+    downward_photons,
     russian_roulette,
 )
 
@@ -117,8 +118,8 @@ def trace_strip(
     the source photons ``sun`` and ``sky`` (downward travel directions and horizontal
     irradiance weights, numpy, as :func:`seahaze.render.photon_sources.emitter_photons`);
     every ``profile_stride``-th photon is traced through the profile too."""
-    sun_d, sun_w = _downward(*sun)
-    sky_d, sky_w = _downward(*sky)
+    sun_d, sun_w = downward_photons(*sun)
+    sky_d, sky_w = downward_photons(*sky)
     d_all, w_all = np.concatenate([sun_d, sky_d]), np.concatenate([sun_w, sky_w])
     n_photons, n_sun, n_levels = len(d_all), len(sun_d), len(sigmas)
     shape = (n_levels, strip.n_s, strip.n_z, strip.n_dir, 3)
@@ -260,10 +261,3 @@ def _tally(tally, base, s, z, along, d, w, step, u, active, p: _StripParams) -> 
         i_z = mi.UInt32(dr.clip(mi.Int32(cz), 0, strip.n_z - 1))
         cell = base + (i_s * strip.n_z + i_z) * strip.n_dir + dir_bin
         dr.scatter_add(tally, packet, cell, inside, mode=dr.ReduceMode.Expand)
-
-
-def _downward(d: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The photons that travel down and carry energy."""
-    d, w = np.asarray(d, np.float64), np.asarray(w, np.float64)
-    keep = (d[:, 2] < -1e-6) & (w.max(axis=1) > 0) if len(d) else np.zeros(0, bool)
-    return d[keep], w[keep]
