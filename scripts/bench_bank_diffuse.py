@@ -41,19 +41,25 @@ def bank_of(text: str) -> dict:
     return {"distance_m": distance, "bearing_deg": bearing, "edge_m": edge, "near_ratio": near}
 
 
-def measure(v: float, bank: dict, cache: Path | None) -> dict:
-    """Per region: the error of the four renders' mean against the reference, the
-    reference's standard error and the scatter of one render's error; and the ratios' time."""
+def measure(
+    v: float, haze_changes: dict, cache: Path | None, batches: int, dense_thin: bool = False
+) -> dict:
+    """Per region: the error of the four renders' mean against the reference (``batches``
+    of 1024 spp, compare_components.py's), the reference's standard error and the scatter of
+    one render's error; and the ratios' time. ``haze_changes``: the benchmark scene's
+    ``haze`` changes (a bank, patches); with
+    ``dense_thin`` the sea, the sky and the vessels also where each pixel's ray holds more
+    than 1.5× the level's mean haze and less than 1/1.5 of it (compare_components.py's)."""
     from seahaze.imaging import luminance
+    from seahaze.render.pixel_density import pixel_density_ratio
     from seahaze.sceneio import load_scene
     from seahaze.spec import with_changes
     from seahaze.visibility import channel_extinction
 
     base, _ = load_scene(SCENE)
-    base = with_changes(base, {"haze": {"bank": bank}})
+    base = with_changes(base, {"haze": haze_changes})
     haze = base.haze
     sigma = channel_extinction(v, haze.threshold, haze.extinction_spectrum)
-    batches = 8 if v == 1000.0 else 4  # the cache key of compare_components.py's references
     _, _, (ref, ref_se) = level_reference(base, v, sigma, batches, cache)
     session, renderer = physical_renderer(base, v)
     start = time.perf_counter()
@@ -64,8 +70,16 @@ def measure(v: float, bank: dict, cache: Path | None) -> dict:
         for seed in SEEDS
     ]
     pixels = session.pixels
+    masks = region_masks(pixels.distance_m, pixels.instance)
+    if dense_thin:
+        ratio = pixel_density_ratio(renderer.field, renderer.geometry)
+        for name in ("sea", "sky", "vessel"):
+            masks[f"{name} dense"] = masks[name] & (ratio > 1.5)
+            masks[f"{name} thin"] = masks[name] & (ratio < 1 / 1.5)
     regions = {}
-    for name, mask in region_masks(pixels.distance_m, pixels.instance).items():
+    for name, mask in masks.items():
+        if not mask.any():
+            continue
         mean, se = region_error(np.mean(runs, 0), ref, ref_se, mask)
         one = [region_error(run, ref, ref_se, mask)[0] for run in runs]
         regions[name] = (mean, se, float(np.std(one, ddof=1)))
@@ -117,7 +131,8 @@ def main() -> None:
     results = {}
     for bank in args.banks.split("/"):
         for v in (float(x) for x in args.cases.split(",")):
-            results[bank, v] = measure(v, bank_of(bank), args.cache)
+            batches = 8 if v == 1000.0 else 4  # the references' (the cache's key)
+            results[bank, v] = measure(v, {"bank": bank_of(bank)}, args.cache, batches)
             print(table({(bank, v): results[bank, v]}).split("|---|")[-1], flush=True)
     text = table(results)
     print(text)

@@ -14,7 +14,8 @@
   form of its sum where the drift has carried the edge.
 * The ratios' grid spreads to the pixels bilinearly within a segment, never across one.
 * The sea's pre-drawn samples come out in each arriving ray's vertical plane; the renderer
-  gives a bank alone its diffuse ratios (1 after open sky), and patches none.
+  gives a bank alone and patches alone their diffuse ratios (1 after open sky), and a bank
+  with patches none.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from conftest import assert_same_plane_parallel_field, eight_way_sea, sun_and_sky_photons
 from seahaze.haze_field import Bank, Drift, HazeField
 from seahaze.medium import HomogeneousSlab
 from seahaze.nonuniform import NonUniformHaze
@@ -29,30 +31,6 @@ from seahaze.nonuniform import NonUniformHaze
 pytestmark = pytest.mark.usefixtures("mitsuba_variant")
 
 SLAB = HomogeneousSlab(top=300.0, albedo=0.998, g=0.75)
-SUN_ELEVATION = np.radians(35.0)
-
-
-def _photons(count: int, seed: int) -> tuple[tuple, tuple]:
-    """A sun at 35° (irradiance 1 W m⁻² on a horizontal plane) and a uniform sky of the same
-    horizontal irradiance, ``count`` photons each, travelling down."""
-    rng = np.random.default_rng(seed)
-    sun_d = np.tile([-np.cos(SUN_ELEVATION) * 0.8, -np.cos(SUN_ELEVATION) * 0.6, 0.0], (count, 1))
-    sun_d[:, 2] = -np.sin(SUN_ELEVATION)
-    sun = (sun_d, np.full((count, 3), 1.0 / count))
-    mu = np.sqrt(rng.random(count))  # cosine-weighted: each photon carries equal irradiance
-    phi = 2.0 * np.pi * rng.random(count)
-    s = np.sqrt(1.0 - mu**2)
-    sky_d = np.stack([s * np.cos(phi), s * np.sin(phi), -mu], axis=1)
-    return sun, (sky_d, np.full((count, 3), 1.0 / count))
-
-
-def _grey_sea():
-    """A sea that sends every photon up at one of eight fixed directions with weight 0.3."""
-    from seahaze.render.photon_tracer import SeaReflectance
-
-    up = np.radians([10.0, 20.0, 35.0, 50.0, 60.0, 70.0, 80.0, 89.0])
-    wo = np.stack([np.cos(up), np.zeros_like(up), np.sin(up)], axis=1)
-    return SeaReflectance(wo[None], np.full((1, len(up), 3), 0.3))
 
 
 def _strip(near_ratio: float = 0.2, scale: float = 1.0, toward_deg: float = 0.0):
@@ -66,11 +44,12 @@ def _strip(near_ratio: float = 0.2, scale: float = 1.0, toward_deg: float = 0.0)
 def test_without_a_bank_the_bank_tally_is_the_profiles_bit_for_bit():
     from seahaze.render.strip_tracer import trace_strip
 
-    got = trace_strip(*_photons(4096, 1), _grey_sea(), [0.004], SLAB, _strip(1.0), 3, 1)
+    photons, sea = sun_and_sky_photons(4096, 1), eight_way_sea()
+    got = trace_strip(*photons, sea, [0.004], SLAB, _strip(1.0), 3, 1)
     assert got.bank.sum() > 0.0
     np.testing.assert_array_equal(got.bank, got.profile)
     # And a bank is not its profile: the same photons see another field.
-    banked = trace_strip(*_photons(4096, 1), _grey_sea(), [0.004], SLAB, _strip(0.2), 3, 1)
+    banked = trace_strip(*photons, sea, [0.004], SLAB, _strip(0.2), 3, 1)
     assert not np.array_equal(banked.bank, banked.profile)
     np.testing.assert_array_equal(banked.profile, got.profile)
 
@@ -78,17 +57,11 @@ def test_without_a_bank_the_bank_tally_is_the_profiles_bit_for_bit():
 def test_the_same_seed_gives_the_same_bytes():
     from seahaze.render.strip_tracer import trace_strip
 
-    runs = [trace_strip(*_photons(2048, 2), _grey_sea(), [0.01], SLAB, _strip(), 7) for _ in "ab"]
+    photons, sea = sun_and_sky_photons(2048, 2), eight_way_sea()
+    runs = [trace_strip(*photons, sea, [0.01], SLAB, _strip(), 7) for _ in "ab"]
     np.testing.assert_array_equal(runs[0].bank, runs[1].bank)
-    other = trace_strip(*_photons(2048, 2), _grey_sea(), [0.01], SLAB, _strip(), 8)
+    other = trace_strip(*photons, sea, [0.01], SLAB, _strip(), 8)
     assert not np.array_equal(runs[0].bank, other.bank)
-
-
-def _bands(fluence: np.ndarray, n_mu: int) -> np.ndarray:
-    """(n_z, 4, rgb): fluence summed over azimuths and over μ in four bands."""
-    n_z = fluence.shape[0]
-    by_mu = fluence.reshape(n_z, n_mu, -1, 3).sum(axis=2)
-    return by_mu.reshape(n_z, 4, n_mu // 4, 3).sum(axis=2)
 
 
 def test_the_profile_field_is_the_diffuse_tables_tracers():
@@ -96,16 +69,12 @@ def test_the_profile_field_is_the_diffuse_tables_tracers():
     from seahaze.render.strip_tracer import trace_strip
 
     sigma = 3.912 / 1000.0
-    photons, sea = _photons(1 << 18, 4), _grey_sea()
+    photons, sea = sun_and_sky_photons(1 << 18, 4), eight_way_sea()
     strip = _strip()
     got = trace_strip(*photons, sea, [sigma], SLAB, strip, 11, 1).profile[0].mean(axis=0)
     slab = Slab(SLAB.top, SLAB.albedo, SLAB.g, 0.0, strip.n_z, strip.n_mu, strip.n_phi, False)
     want = trace_fluence(*photons, sea, [sigma], slab, 12)[0]
-    got_bands, want_bands = _bands(got, strip.n_mu), _bands(want, strip.n_mu)
-    # Every band holds light, and they agree within a few per cent (both tracers' noise).
-    assert np.all(want_bands > 0.0)
-    np.testing.assert_allclose(got_bands, want_bands, rtol=0.03)
-    np.testing.assert_allclose(got.sum(), want.sum(), rtol=0.005)
+    assert_same_plane_parallel_field(got, want, strip.n_mu)
 
 
 def test_deep_inside_a_thick_bank_the_field_is_the_plane_parallel_one():
@@ -113,7 +82,7 @@ def test_deep_inside_a_thick_bank_the_field_is_the_plane_parallel_one():
     from seahaze.render.strip_tracer import Strip, trace_strip
 
     sigma, scale = 3.912 / 300.0, 1.3
-    photons, sea = _photons(1 << 18, 5), _grey_sea()
+    photons, sea = sun_and_sky_photons(1 << 18, 5), eight_way_sea()
     # Cells from 3 to 5 km past the edge: ten transport mean free paths of this bank.
     strip = Strip(3000.0, 5000.0, 2, SLAB.top, 6, 8, 8, 0.0, 80.0, 0.2, scale, 3000.0)
     got = trace_strip(*photons, sea, [sigma], SLAB, strip, 13).bank[0]
@@ -141,7 +110,8 @@ def _rays():
 
 
 def test_a_diffuse_field_the_same_everywhere_gives_ratio_one_and_twice_it_two():
-    from seahaze.render.bank_diffuse import SourceTables, bank_strip, ray_sums
+    from seahaze.render.bank_diffuse import SourceTables, bank_strip
+    from seahaze.render.diffuse_ratios import ray_sums
 
     medium = _bank_medium()
     strip = bank_strip(medium, (0.0, 0.0))
@@ -157,16 +127,16 @@ def test_a_diffuse_field_the_same_everywhere_gives_ratio_one_and_twice_it_two():
     view = field_length / medium.profile.path_length(origin[2], dirs[:, 2], reach)
     assert np.ptp(view) > 0.5  # rays that see very different amounts of the bank
     sigma = np.array([3.912 / 300.0, 3.912 / 2000.0])
-    uniform = SourceTables(strip, cells, heights)
+    uniform = SourceTables(medium, strip, cells, heights)
     true, equivalent = ray_sums(medium, uniform, sigma, starts, dirs, reach, view)
     np.testing.assert_allclose(true / equivalent, 1.0, atol=2e-3)
-    twice = SourceTables(strip, 2.0 * cells, heights)
+    twice = SourceTables(medium, strip, 2.0 * cells, heights)
     doubled, _ = ray_sums(medium, twice, sigma, starts, dirs, reach, view)
     np.testing.assert_allclose(doubled, 2.0 * true, rtol=1e-12)
 
 
 def test_ratios_spread_bilinearly_within_a_segment_and_never_across_one():
-    from seahaze.render.bank_diffuse import spread_within_segments
+    from seahaze.render.diffuse_ratios import spread_within_segments
 
     height, width, step = 37, 50, 4
     rows, cols = np.arange(0, height, step), np.arange(0, width, step)
@@ -189,7 +159,8 @@ def test_a_ray_reads_the_bank_field_where_the_drifted_bank_has_moved_it():
     """A bank of uniform density (near ratio 1) whose field doubles past the edge: a
     horizontal ray's sum is the closed form of ``∫ e^{−σct} σc J(t) dt`` with ``J`` stepping
     where the ray crosses the edge, wherever the drift has carried the edge (1.2 km here)."""
-    from seahaze.render.bank_diffuse import SourceTables, bank_strip, ray_sums
+    from seahaze.render.bank_diffuse import SourceTables, bank_strip
+    from seahaze.render.diffuse_ratios import ray_sums
 
     drift = Drift(speed_m_s=30.0, toward_deg=180.0, time_s=40.0)  # the edge 1200 m nearer
     bank = Bank(2500.0, 0.0, 80.0, 1.0)
@@ -200,7 +171,7 @@ def test_a_ray_reads_the_bank_field_where_the_drifted_bank_has_moved_it():
     past = np.repeat(centres >= 0.0, strip.n_z)  # cells past the edge, as (s, z) rows
     cells = np.where(past[None, :, None], 2.0, 1.0) * np.ones((1, 1, strip.n_dir))
     heights = np.ones((1, strip.n_z, strip.n_dir))
-    sources = SourceTables(strip, cells, heights)
+    sources = SourceTables(medium, strip, cells, heights)
     sigma, reach = 3.912 / 4000.0, 6000.0
     origin, ray = np.array([0.0, 0.0, 15.0]), np.array([[1.0, 0.0, 0.0]])
     true, _ = ray_sums(
@@ -239,7 +210,7 @@ def test_sea_samples_keep_the_plane_of_incidence_and_one_pick_per_column():
     np.testing.assert_allclose(out[..., 2], wo[pick, 2], rtol=1e-12)
 
 
-def test_the_renderer_gives_a_bank_alone_its_diffuse_ratios_and_patches_none():
+def test_the_renderer_gives_a_bank_or_patches_their_diffuse_ratios_and_both_none():
     from conftest import small_spec
     from seahaze.haze_field import Patches
     from seahaze.render.engine import open_session
@@ -252,14 +223,16 @@ def test_the_renderer_gives_a_bank_alone_its_diffuse_ratios_and_patches_none():
         render={"mode": "physical", "spp": 4, "seed": 3},
     )
     sigma = np.array([3.912 / 800.0, 3.912 / 300.0])
-    bank = HazeField(bank=Bank(600.0, 0.0, 80.0, 0.2))
+    bank = Bank(600.0, 0.0, 80.0, 0.2)
+    patches = Patches(300.0, 3.0, 60.0, 5.0, seed=5)
     for field, has in (
-        (bank, True),
-        (HazeField(patches=Patches(300.0, 3.0, 60.0, 5.0, seed=5)), False),
+        (HazeField(bank=bank), True),
+        (HazeField(patches=patches), True),
+        (HazeField(patches=patches, bank=bank), False),
     ):
         session = open_session(spec, medium=NonUniformHaze(SLAB, field, 1.0))
         renderer = PhysicalRenderer(session.loaded, spec, geometry=session.pixels)
-        ratios = renderer.pixel_ratios(sigma, 1)
+        ratios = renderer.pixel_ratios(sigma, 1, 1 << 14)
         if not has:
             assert ratios.diffuse_air is None and ratios.diffuse_bounce is None
             continue
@@ -270,3 +243,4 @@ def test_the_renderer_gives_a_bank_alone_its_diffuse_ratios_and_patches_none():
         # Open sky has no later segment; the sea's do not stay the tables' light.
         np.testing.assert_array_equal(ratios.diffuse_bounce[:, sky], 1.0)
         assert np.ptp(ratios.diffuse_bounce[:, ~sky]) > 0.0
+        assert np.ptp(ratios.diffuse_air) > 0.0

@@ -933,8 +933,8 @@ class EstimatorSpec(_Spec):
         None,
         ge=1024,
         le=1 << 24,
-        description="Photons per level of a fog bank's own diffuse field (default: the "
-        "diffuse tables' number).",
+        description="Photons per level of a fog bank's or patches' own diffuse field "
+        "(default: the diffuse tables' number).",
     )
 
 

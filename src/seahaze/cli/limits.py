@@ -96,6 +96,12 @@ strip traced and the ratios' grid summed (0.7–1.7 s per level for 2^20 photons
 machine, the first of a process compiling the strip's kernel; docs/benchmarks.md, "How close
 is physical in a fog bank?")."""
 
+PATCH_PHOTON_S = 4.0e-06
+"""The same for patches alone: their box traced (both families) and the ratios' grid summed
+(at 1280×720, 2^20 photons per level: the 11 graded levels' boxes 30 s, denser levels longer,
+and the sums 17 s; docs/benchmarks.md, "What the physical mode's equivalent profiles
+cost")."""
+
 VALIDATED_FROM_M = {"physical": 100.0}
 """Thinnest visibility (m) down to which the mode is within 3 % of converged ``reference``
 renders in every region (docs/physics.md, "Validated range"; docs/benchmarks.md): ``physical``
@@ -103,11 +109,13 @@ from 100 m (measured at 100, 200, 300, 1000 and 4000 m). ``reference`` is the un
 at every level; ``asm`` is an approximation that is never within 3 % (5–17 % at 300–4000 m)."""
 
 VARYING_VALIDATED_FROM_M = {"physical": 1000.0}
-"""The same for patches (``haze.patches``), within 3.5 % rather than 3 %: ``physical`` renders
-them as each pixel's equivalent profile, every region within 3.4 % of the ``reference`` at
-1000 m and 1 % at 4000 m for strong patches (density ratio 30), too bright at 300 m
-(+7 … +14 %) where dense patches shield their own inside (docs/physics.md, "Haze that varies
-across the sea in the physical mode")."""
+"""The same for patches (``haze.patches``): ``physical`` gives patches alone the diffuse light
+of their own field (``render/patch_diffuse.py``), every region within 1 % of the
+``reference`` at 1000 and 4000 m for strong patches (density ratio 30; the mean of four
+renders), and at 300 m the sea and sky within 3 %, the vessels +4.2 ± 1.6 % (the reference's
+standard error): validated within 3 % from 1000 m (docs/physics.md, "Drifting patches' own
+diffuse field"). Patches with a bank keep the tables' diffuse field: within 3.5 % from
+1000 m as patches were before theirs, too bright below."""
 BANK_VALIDATED_FROM_M = {"physical": 300.0}
 """The same in a fog bank (``haze.bank``), within 3 %: ``physical`` gives a bank the diffuse
 light of its own field, traced through a strip across its edge (``render/bank_diffuse.py``);
@@ -232,10 +240,13 @@ def scene_core_seconds(spec: SceneSpec) -> tuple[float, float]:
         # The tables were timed at the fewest photons; larger passes trace more.
         photons = settings.photons_for(pixels * spp) / settings.min_table_photons
         tables = photons * sum(_interpolated(PHYSICAL_TABLE_S, v) for v in levels)
+        # A bank alone or patches alone get their own diffuse field, traced per level
+        # (render/bank_diffuse, render/patch_diffuse).
+        own = settings.bank_photons_for(settings.photons_for(pixels * spp))
         if spec.haze.bank is not None and spec.haze.patches is None:
-            # A bank alone gets its own diffuse field, traced per level (render/bank_diffuse).
-            strip = settings.bank_photons_for(settings.photons_for(pixels * spp))
-            tables += len(levels) * strip * BANK_PHOTON_S
+            tables += len(levels) * own * BANK_PHOTON_S
+        if spec.haze.patches is not None and spec.haze.bank is None:
+            tables += len(levels) * own * PATCH_PHOTON_S
         return serial, parallel + tables
     parallel = pixels * spp * CLEAN_CORE_S
     # Delta tracking samples at the field's bound: patches whose density spans R cost about

@@ -167,8 +167,9 @@ def _warn_below_validated_range(plan: Any) -> None:
         below = sorted(v for v in plan.levels if floor is not None and v < floor)
         if below:
             where = "in patchy haze " if patches else "in a fog bank " if bank else ""
-            why = ", where dense patches render too bright" if patches else ""
-            within = "3.5 %" if patches else "3 %"
+            # Patches with a bank keep the tables' diffuse field (neither tracer covers both).
+            why = ", where dense patches may render too bright" if patches and bank else ""
+            within = "3.5 %" if patches and bank else "3 %"
             print(
                 f"seahaze: warning: {where}the {mode} mode is validated (within {within} of "
                 f"converged references) down to V = {floor:g} m; "

@@ -49,8 +49,9 @@ class EstimatorSettings:
     max_table_photons: int = 1 << 20
     """Most photons per level table."""
     bank_photons: int | None = None
-    """Photons per level of a fog bank's own diffuse field (:mod:`seahaze.render.bank_diffuse`);
-    None: :meth:`bank_photons_for` the tables' photons."""
+    """Photons per level of a fog bank's or patches' own diffuse field
+    (:mod:`seahaze.render.bank_diffuse`, :mod:`seahaze.render.patch_diffuse`); None:
+    :meth:`bank_photons_for` the tables' photons."""
     max_levels_per_pass: int = 12
     """Most levels one pass renders (its kernel grows with the count; more levels are rendered
     in several passes of the same camera paths, :func:`seahaze.render.physical.levels_per_pass`)."""
@@ -91,11 +92,12 @@ class EstimatorSettings:
         return min(max(rounded, self.min_table_photons), self.max_table_photons)
 
     def bank_photons_for(self, table_photons: int) -> int:
-        """Photons per level of a fog bank's diffuse field for a pass whose tables get
-        ``table_photons`` each: :attr:`bank_photons` if set, else the same number (at least
-        :attr:`min_table_photons`). The bank's tally has forty-odd cells across the edge for
-        each of the table's heights, but its ratio is summed along rays through them
-        (docs/benchmarks.md, "How close is physical in a fog bank?")."""
+        """Photons per level of a fog bank's or patches' diffuse field for a pass whose tables
+        get ``table_photons`` each: :attr:`bank_photons` if set, else the same number (at
+        least :attr:`min_table_photons`). The bank's tally has forty-odd cells across the edge
+        for each of the table's heights, the patches' box thousands of columns, but their
+        ratios are summed along rays through them (docs/benchmarks.md, "How close is physical
+        in a fog bank?", "… in drifting patches?")."""
         if self.bank_photons is not None:
             return self.bank_photons
         return max(table_photons, self.min_table_photons)

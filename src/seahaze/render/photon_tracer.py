@@ -230,6 +230,28 @@ def russian_roulette(w: tuple, u: object) -> tuple[tuple, object]:
     return tuple(dr.select(low & survive, c * lift, c) for c in w), survive
 
 
+def scatter_or_reflect(d, w, u, real, at_sea, albedo, g, tables: SeaTables) -> tuple[tuple, tuple]:
+    """Travel directions and weights after a flight that ended in a real collision (``real``:
+    scattered by the Henyey–Greenstein phase of ``g``, the weight times ``albedo``), at the
+    sea (``at_sea``: one of the sea's pre-drawn samples) or in neither (unchanged); ``u``:
+    three uniform numbers (the cosine, the azimuth, the sea's sample). The step the field
+    tracers (a bank's strip, patches' box) share."""
+    import drjit as dr
+
+    cos_t = jit_haze.hg_sample_cos(u[0], g)
+    scattered = jit_haze.rotate_directions(d, cos_t, 2.0 * dr.pi * u[1])
+    reflected, sea_w = tables.reflect(d, u[2], at_sea)
+    d = tuple(
+        dr.select(real, a, dr.select(at_sea, b, c))
+        for a, b, c in zip(scattered, reflected, d, strict=True)
+    )
+    w = tuple(
+        dr.select(real, c * albedo, dr.select(at_sea, c * k, c))
+        for c, k in zip(w, sea_w, strict=True)
+    )
+    return d, w
+
+
 def downward_photons(d: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Of source photons (travel directions (n, 3), weights (n, 3)), those that travel down
     and carry energy (the sky below the horizon has none), as float64."""

@@ -240,9 +240,12 @@ class PhysicalRenderer:
             sun = sun_axis(self.sun)
             levels = np.asarray(key[0])
             ratios = pixel_ratios(self.field, self.geometry, sun, levels)
+            photons = bank_photons or self.settings.bank_photons_for(0)
             if self.segments is not None:
-                photons = bank_photons or self.settings.bank_photons_for(0)
                 air, bounce = self.bank_diffuse(ratios, levels, seed, photons)
+                ratios = replace(ratios, diffuse_air=air, diffuse_bounce=bounce)
+            elif self.field.field.bank is None and self.field.field.patches is not None:
+                air, bounce = self.patch_diffuse(ratios, levels, seed, photons)
                 ratios = replace(ratios, diffuse_air=air, diffuse_bounce=bounce)
             self._ratios[key] = ratios
         return self._ratios[key]
@@ -253,15 +256,33 @@ class PhysicalRenderer:
         """(L, H, W) each pixel's ``diffuse_air`` and ``diffuse_bounce`` ratios in the scene's
         bank (:mod:`seahaze.render.bank_diffuse`) at levels of (green) extinction ``sigma``,
         the bank's field traced with ``photons`` per level from ``seed``."""
-        from . import bank_diffuse  # a Mitsuba variant is set by now
+        from . import bank_diffuse, diffuse_ratios  # a Mitsuba variant is set by now
 
         assert self.field is not None and self.geometry is not None
         origin = (float(self.geometry.origin[0]), float(self.geometry.origin[1]))
         strip, fluence = bank_diffuse.trace_bank(
             self.field, self.sun, self.sky, self.sea, sigma, origin, photons, seed
         )
-        return bank_diffuse.diffuse_ratios(
-            self.field, self.geometry, ratios.view, strip, fluence, sigma, self.sea
+        sources = bank_diffuse.SourceTables.of(self.field, strip, fluence)
+        return diffuse_ratios.diffuse_ratios(
+            self.field, self.geometry, ratios.view, sources, sigma, self.sea
+        )
+
+    def patch_diffuse(
+        self, ratios: PixelRatios, sigma: np.ndarray, seed: int, photons: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(L, H, W) each pixel's ``diffuse_air`` and ``diffuse_bounce`` ratios in the scene's
+        patches (:mod:`seahaze.render.patch_diffuse`) at levels of (green) extinction
+        ``sigma``, the field traced with ``photons`` per level from ``seed``."""
+        from . import diffuse_ratios, patch_diffuse  # a Mitsuba variant is set by now
+
+        assert self.field is not None and self.geometry is not None
+        origin = (float(self.geometry.origin[0]), float(self.geometry.origin[1]))
+        sources = patch_diffuse.trace_patches(
+            self.field, self.sun, self.sky, self.sea, sigma, origin, photons, seed
+        )
+        return diffuse_ratios.diffuse_ratios(
+            self.field, self.geometry, ratios.view, sources, sigma, self.sea, ratios.bounce
         )
 
     def vessel_light(

@@ -49,6 +49,7 @@ from .photon_tracer import (
     SeaTables,
     downward_photons,
     russian_roulette,
+    scatter_or_reflect,
 )
 
 TRACK_POINTS = 4
@@ -182,17 +183,7 @@ def trace_strip(
         density = profile.density(z_end, ops) * dr.select(family == 0, bank, 1.0)
         real = collide & (u[1] * p.bound < density)
         at_sea = ~collide & (dz < 0)
-        cos_t = jit_haze.hg_sample_cos(u[2], p.g)
-        scattered = jit_haze.rotate_directions(d, cos_t, 2.0 * dr.pi * u[3])
-        reflected, sea_w = tables.reflect(d, u[4], at_sea)
-        d = tuple(
-            dr.select(real, a, dr.select(at_sea, b, c))
-            for a, b, c in zip(scattered, reflected, d, strict=True)
-        )
-        w = tuple(
-            dr.select(real, c * p.albedo, dr.select(at_sea, c * k, c))
-            for c, k in zip(w, sea_w, strict=True)
-        )
+        d, w = scatter_or_reflect(d, w, u[2:5], real, at_sea, p.albedo, p.g, tables)
         z = dr.select(at_sea, 0.0, z_end)
         direct &= ~(real | at_sea)
         inside = (s_end > p.leave_lo) & (s_end < p.leave_hi)

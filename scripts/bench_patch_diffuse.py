@@ -1,0 +1,108 @@
+"""How close is the ``physical`` mode in drifting patches, and how much does one render scatter?
+
+``physical`` gives patches the diffuse light of their own field (``render/patch_diffuse.py``:
+photons traced through a periodic box of the field around the camera, each cell's fluence over
+the profile's scaling the profile's light; each pixel's camera segment and later segments
+scaled by their ratio to the tables' light). This script compares it per region with converged
+``volpath`` references of the same patches (as ``scripts/compare_components.py`` does, whose
+reference cache it shares): four renders of 256 spp, each with its own seed and so its own
+traced box, reported as the error of their mean and as the scatter of one render's region error
+about it. Sea, sky and vessels are also compared where each pixel's ray holds more than 1.5×
+the level's mean haze (``dense``) and less than 1/1.5 of it (``thin``). The time is that of the
+patches' ratios alone (tracing the box and summing the pixels' rays) for the one level, with
+the photons the tables get at full size (2^20).
+
+Usage: python scripts/bench_patch_diffuse.py [--cases 300,1000,4000]
+       [--patches 400,3,60,30/400,3,60,5] [--cache DIR] [--doc]
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_bank_diffuse import SEEDS, SPP, measure
+from bench_passes import replace_section
+
+ROOT = Path(__file__).resolve().parents[1]
+BATCHES = 4
+"""The references' batches of 1024 spp (compare_components.py ``--batches``)."""
+REGIONS = ("sea", "sky", "vessel", "sea dense", "sea thin", "vessel thin")
+
+
+def patches_of(text: str) -> dict:
+    """``haze.patches`` from ``CORRELATION,ANISOTROPY,VERTICAL,RATIO``."""
+    corr, aniso, vertical, ratio = (float(x) for x in text.split(","))
+    return {
+        "correlation_m": corr,
+        "anisotropy": aniso,
+        "vertical_m": vertical,
+        "density_ratio": ratio,
+    }
+
+
+def table(results: dict) -> str:
+    """The results (by patches text and V) as docs/benchmarks.md's table, its caption saying
+    how they were made."""
+    lines = [
+        "## physical in drifting patches against converged references "
+        "(scripts/bench_patch_diffuse.py)",
+        "",
+        f"Machine: {platform.machine()}, `llvm_ad_rgb`. Benchmark scene (80×45); patches are "
+        "CORRELATION m along the drift, ANISOTROPY, VERTICAL m, density RATIO "
+        f"(`haze.patches`); `physical` {len(SEEDS)} renders of {SPP} spp (their own seeds, so "
+        "their own traced boxes; 2^20 photons per level for tables and box) against "
+        f"`volpath` references of compare_components.py ({BATCHES} × 1024 spp). Per cent: the "
+        "error of the renders' mean ± the reference's standard error, then (in brackets) the "
+        "standard deviation of "
+        "one render's error. `dense`/`thin`: pixels whose ray holds more than 1.5× / less than "
+        "1/1.5 of the level's mean haze (— where none). Ratios: the box traced and the pixels' "
+        "rays summed, for the one level.",
+        "",
+        f"| patches | V (m) | {' | '.join(REGIONS)} | ratios (s) |",
+        "|---|---|" + "---|" * len(REGIONS) + "---|",
+    ]
+    for (patches, v), result in results.items():
+        cells = [
+            "{:+.2f} ± {:.2f} ({:.2f})".format(*(100 * x for x in result["regions"][r]))
+            if r in result["regions"]
+            else "—"
+            for r in REGIONS
+        ]
+        lines.append(f"| {patches} | {v:g} | {' | '.join(cells)} | {result['ratios_s']:.1f} |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--cases", default="300,1000,4000", help="visibilities (m)")
+    parser.add_argument(
+        "--patches",
+        default="400,3,60,30/400,3,60,5",
+        help="haze.patches as CORRELATION,ANISOTROPY,VERTICAL,RATIO, several separated by /",
+    )
+    parser.add_argument(
+        "--cache",
+        type=Path,
+        default=ROOT / "out" / "compare-cache",
+        help="where the volpath references are kept (compare_components.py's --cache)",
+    )
+    parser.add_argument("--doc", action="store_true", help="write the table into docs/")
+    args = parser.parse_args()
+    results = {}
+    for patches in args.patches.split("/"):
+        for v in (float(x) for x in args.cases.split(",")):
+            changes = {"patches": patches_of(patches)}
+            results[patches, v] = measure(v, changes, args.cache, BATCHES, dense_thin=True)
+            print(table({(patches, v): results[patches, v]}).split("|---|")[-1], flush=True)
+    text = table(results)
+    print(text)
+    if args.doc:
+        replace_section("patch-diffuse", text, "scripts/bench_patch_diffuse.py")
+
+
+if __name__ == "__main__":
+    main()

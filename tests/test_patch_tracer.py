@@ -1,0 +1,167 @@
+"""Drifting patches' own diffuse field (``seahaze.render.patch_tracer``, ``render.patch_diffuse``).
+
+* Without patches (scale 1) the field's tally, summed over a height's columns, is the
+  profile's summed over each direction group, to the integer: both families draw the same
+  random numbers and see the same density; the cells' ratios then average 1 and the groups'
+  light adds up to the profile's.
+* The profile's field is the diffuse tables' own tracer's (``photon_tracer.trace_fluence``, an
+  independent estimator) per height and μ band, within their noise; a uniform field of density
+  1.3 is the tables' field at 1.3 times the extinction, in every column: the box is periodic,
+  so no side of it is dark (a sun at 35° would leave the side it shines from without light
+  from beyond it).
+* In patches, the field is darkest under the most haze: a cell's fluence ratio falls with the
+  optical depth of the column above it (the haze shields it from the light from above), a
+  structure two seeds share.
+* The same seed gives the same bytes.
+* The light a ray reads is the profile's times the cell's ratio, the profile's outside the
+  box; with every ratio 1 a ray's ``diffuse_air`` sum equals its equivalent profile's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from conftest import assert_same_plane_parallel_field, eight_way_sea, sun_and_sky_photons
+from seahaze.haze_field import HazeField, Patches
+from seahaze.medium import HomogeneousSlab
+from seahaze.nonuniform import NonUniformHaze
+
+pytestmark = pytest.mark.usefixtures("mitsuba_variant")
+
+SLAB = HomogeneousSlab(top=300.0, albedo=0.998, g=0.75)
+PATCHES = Patches(400.0, 3.0, 60.0, 30.0, seed=5)
+
+
+def _box(side: float = 3000.0, n_xy: int = 16, n_z: int = 6):
+    from seahaze.render.patch_tracer import Box
+
+    return Box(-0.5 * side, -0.3 * side, side, n_xy, SLAB.top, n_z, 8, 8, n_band=4, n_sector=2)
+
+
+def _trace(field: HazeField, sigma: float, scale: float, box, photons, seed: int):
+    from seahaze.render.patch_tracer import trace_box
+
+    return trace_box(*photons, eight_way_sea(), [sigma], SLAB, field, scale, 0.0, box, seed)
+
+
+def test_without_patches_the_fields_tally_is_the_profiles_to_the_integer():
+    box = _box()
+    got = _trace(HazeField(), 0.004, 1.0, box, sun_and_sky_photons(4096, 1), 3)
+    # Per height and direction group (band of μ × sector of azimuth: the profile's direction
+    # bins summed over each group, as Box.groups assigns them).
+    per_height = got.field[0].sum(axis=(0, 1)) / box.n_xy**2
+    assert np.all(per_height > 0.0)
+    one_hot = box.groups()[:, None] == np.arange(box.n_light)[None]
+    groups = np.einsum("zdc,dg->zgc", got.profile[0], one_hot)
+    np.testing.assert_allclose(per_height, groups, rtol=1e-12)
+    # So the cells' ratios average 1 in every height and group (smoothing wraps around the
+    # box, keeping the mean), and the groups' light adds up to the profile's whole light.
+    from seahaze.render.diffuse_ratios import LUMINANCE
+    from seahaze.render.diffuse_table import TableGrid, phase_matrix
+    from seahaze.render.patch_diffuse import PatchLight
+
+    medium = NonUniformHaze(SLAB, HazeField(), 1.0)
+    light = PatchLight.of(medium, [box], [got])
+    np.testing.assert_allclose(light.ratio[0].mean(axis=(0, 1)), 1.0, rtol=1e-9)
+    phase = phase_matrix(SLAB.g, TableGrid(box.n_z, box.n_mu, box.n_phi, folded=False)).T
+    whole = (got.profile[0] @ LUMINANCE) @ phase
+    np.testing.assert_allclose(light.profile[0].sum(axis=1), whole, rtol=1e-9)
+    # Patches are not the profile: the same photons see another field.
+    patchy = _trace(HazeField(patches=PATCHES), 0.004, 1.0, box, sun_and_sky_photons(4096, 1), 3)
+    assert np.max(np.abs(patchy.field[0].sum(axis=(0, 1)) / box.n_xy**2 - per_height)) > 0.0
+
+
+def test_the_same_seed_gives_the_same_bytes():
+    field = HazeField(patches=PATCHES)
+    runs = [_trace(field, 0.01, 1.0, _box(), sun_and_sky_photons(2048, 2), 7) for _ in "ab"]
+    np.testing.assert_array_equal(runs[0].field, runs[1].field)
+    np.testing.assert_array_equal(runs[0].profile, runs[1].profile)
+    other = _trace(field, 0.01, 1.0, _box(), sun_and_sky_photons(2048, 2), 8)
+    assert not np.array_equal(runs[0].field, other.field)
+
+
+def _tables_tracer(photons, sigma: float, box, seed: int) -> np.ndarray:
+    from seahaze.render.photon_tracer import Slab, trace_fluence
+
+    slab = Slab(SLAB.top, SLAB.albedo, SLAB.g, 0.0, box.n_z, box.n_mu, box.n_phi, False)
+    return trace_fluence(*photons, eight_way_sea(), [sigma], slab, seed)[0]
+
+
+def test_the_profile_field_is_the_diffuse_tables_tracers():
+    sigma = 3.912 / 1000.0
+    photons, box = sun_and_sky_photons(1 << 18, 4), _box()
+    got = _trace(HazeField(), sigma, 1.0, box, photons, 11).profile[0]
+    want = _tables_tracer(photons, sigma, box, 12)
+    assert_same_plane_parallel_field(got, want, box.n_mu)
+
+
+def test_a_uniform_field_is_the_plane_parallel_one_in_every_column():
+    sigma, scale = 3.912 / 1000.0, 1.3
+    photons, box = sun_and_sky_photons(1 << 18, 5), _box(n_xy=4)
+    got = _trace(HazeField(), sigma, scale, box, photons, 13).field[0].sum(axis=3)
+    want = _tables_tracer(photons, sigma * scale, box, 14).sum(axis=1)
+    for column in got.reshape(-1, box.n_z, 3):
+        np.testing.assert_allclose(column, want, rtol=0.04)
+    # The columns the sun's side would leave dark in a closed box hold what the rest do.
+    by_column = got.sum(axis=(2, 3))
+    np.testing.assert_allclose(by_column, by_column.mean(), rtol=0.03)
+
+
+def test_in_patches_the_field_is_darkest_under_the_most_haze():
+    from seahaze.render.patch_diffuse import smooth_periodic
+
+    sigma = 3.912 / 300.0
+    medium = NonUniformHaze(SLAB, HazeField(patches=PATCHES), 1.0)
+    box = _box(side=1200.0, n_xy=24, n_z=6)
+    ratios = []
+    for seed in (21, 22):
+        traced = _trace(medium.field, sigma, 1.0, box, sun_and_sky_photons(1 << 17, seed), seed)
+        lowest = smooth_periodic(traced.field[0, ..., 1].sum(axis=-1), 1)[..., 0]
+        ratios.append(lowest / traced.profile[0, 0, :, 1].sum())
+    centres = box.x0 + (np.arange(box.n_xy) + 0.5) * box.side_m / box.n_xy
+    x, y = np.meshgrid(centres, centres - box.x0 + box.y0, indexing="ij")
+    heights = np.arange(5.0, SLAB.top, 10.0)
+    column = sum(medium.density_at(x, y, np.full_like(x, h)) for h in heights)
+    a, b = (r.ravel() for r in ratios)
+    assert np.corrcoef(a, b)[0, 1] > 0.5  # a structure both seeds find, not noise
+    assert np.corrcoef(0.5 * (a + b), column.ravel())[0, 1] < -0.5
+    assert np.ptp(0.5 * (a + b)) > 0.1  # and it is not a small one
+
+
+def test_a_ray_reads_the_profiles_light_times_its_cells_ratio():
+    from seahaze.render.diffuse_ratios import ray_sums
+    from seahaze.render.patch_diffuse import PatchLight
+
+    medium = NonUniformHaze(SLAB, HazeField(patches=PATCHES), 1.0)
+    box = _box(side=2000.0, n_xy=8)
+    rng = np.random.default_rng(9)
+    # Each group's light, the same toward every direction (whatever bins a ray reads).
+    per_group = rng.random((box.n_z, box.n_light)) + 0.1
+    profile = np.repeat(per_group[..., None], box.n_dir, axis=2)
+    ratio = rng.random((box.n_xy, box.n_xy, box.n_z, box.n_light)) + 0.5
+    light = PatchLight(medium, [box], [ratio], [profile])
+    # A point in cell (2, 5, 1) and one beyond the box's side.
+    cell = box.side_m / box.n_xy
+    x = np.array([[box.x0 + 2.5 * cell, box.x0 - 10.0]])
+    y = np.array([[box.y0 + 5.5 * cell, box.y0 + 5.5 * cell]])
+    z = np.array([[1.5 * SLAB.top / box.n_z] * 2])
+    true, flat = light.light(0, x, y, z, np.array([[0.0, 0.0, -1.0]]))
+    group = per_group[1]
+    # (Read in float32: its sums hold 1e-6.)
+    np.testing.assert_allclose(flat[0], group.sum(), rtol=1e-6)
+    np.testing.assert_allclose(true[0], [group @ ratio[2, 5, 1], group.sum()], rtol=1e-6)
+    # Every ratio 1 and the light the same at every height: each ray's sum through the
+    # patches is its equivalent profile's (``∫ e^{−τ} σρ ds = 1 − e^{−σℓ}`` in both).
+    same = np.broadcast_to(profile[0], profile.shape)  # the same at every height
+    ones = PatchLight(medium, [box], [np.ones_like(ratio)], [same])
+    dirs = np.array([[1.0, 0.0, 0.0], [0.6, 0.8, 0.05], [0.0, -1.0, 0.2]])
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    starts = np.tile([0.0, 0.0, 15.0], (3, 1))
+    reach = np.array([900.0, 1500.0, (SLAB.top - 15.0) / dirs[2, 2]])
+    length = medium.lengths_along(starts, dirs, np.zeros(3), reach)
+    view = length / medium.profile.path_length(15.0, dirs[:, 2], reach)
+    assert np.ptp(view) > 0.1
+    sigma = np.array([3.912 / 300.0])
+    got, equivalent = ray_sums(medium, ones, sigma, starts, dirs, reach, view)
+    np.testing.assert_allclose(got / equivalent, 1.0, atol=3e-3)
