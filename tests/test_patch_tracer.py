@@ -11,7 +11,8 @@
   from beyond it).
 * In patches, the field is darkest under the most haze: a cell's fluence ratio falls with the
   optical depth of the column above it (the haze shields it from the light from above), a
-  structure two seeds share.
+  structure two seeds share; a drifting field's light follows the columns where its haze has
+  drifted to, not where it lay before.
 * The same seed gives the same bytes.
 * The light a ray reads is the profile's times the cell's ratio, the profile's outside the
   box; with every ratio 1 a ray's ``diffuse_air`` sum equals its equivalent profile's.
@@ -108,24 +109,38 @@ def test_a_uniform_field_is_the_plane_parallel_one_in_every_column():
     np.testing.assert_allclose(by_column, by_column.mean(), rtol=0.03)
 
 
-def test_in_patches_the_field_is_darkest_under_the_most_haze():
-    from seahaze.render.patch_diffuse import smooth_periodic
+_DENSE_BOX = dict(side=1200.0, n_xy=24, n_z=6)
+"""A box at 300 m: cells of 50 m, patches 400 m × 133 m across."""
 
-    sigma = 3.912 / 300.0
-    medium = NonUniformHaze(SLAB, HazeField(patches=PATCHES), 1.0)
-    box = _box(side=1200.0, n_xy=24, n_z=6)
-    ratios = []
-    for seed in (21, 22):
-        traced = _trace(medium.field, sigma, 1.0, box, sun_and_sky_photons(1 << 17, seed), seed)
-        lowest = smooth_periodic(traced.field[0, ..., 1].sum(axis=-1), 1)[..., 0]
-        ratios.append(lowest / traced.profile[0, 0, :, 1].sum())
-    centres = box.x0 + (np.arange(box.n_xy) + 0.5) * box.side_m / box.n_xy
-    x, y = np.meshgrid(centres, centres - box.x0 + box.y0, indexing="ij")
+
+def _lowest_ratio(field: HazeField, travelled_m: float, seed: int) -> np.ndarray:
+    """The lowest height's fluence ratio per column (smoothed over its neighbours) at 300 m,
+    flattened, traced with ``seed``."""
+    from seahaze.render.patch_diffuse import smooth_periodic
+    from seahaze.render.patch_tracer import trace_box
+
+    box, photons = _box(**_DENSE_BOX), sun_and_sky_photons(1 << 17, seed)
+    traced = trace_box(
+        *photons, eight_way_sea(), [3.912 / 300.0], SLAB, field, 1.0, travelled_m, box, seed
+    )
+    lowest = smooth_periodic(traced.field[0, ..., 1].sum(axis=-1), 1)[..., 0]
+    return (lowest / traced.profile[0, 0, :, 1].sum()).ravel()
+
+
+def _column_haze(medium: NonUniformHaze) -> np.ndarray:
+    """The haze in each column of the box (the density summed over heights), flattened."""
+    box = _box(**_DENSE_BOX)
+    centres = (np.arange(box.n_xy) + 0.5) * box.side_m / box.n_xy
+    x, y = np.meshgrid(box.x0 + centres, box.y0 + centres, indexing="ij")
     heights = np.arange(5.0, SLAB.top, 10.0)
-    column = sum(medium.density_at(x, y, np.full_like(x, h)) for h in heights)
-    a, b = (r.ravel() for r in ratios)
+    return sum(medium.density_at(x, y, np.full_like(x, h)) for h in heights).ravel()
+
+
+def test_in_patches_the_field_is_darkest_under_the_most_haze():
+    medium = NonUniformHaze(SLAB, HazeField(patches=PATCHES), 1.0)
+    a, b = (_lowest_ratio(medium.field, 0.0, seed) for seed in (21, 22))
     assert np.corrcoef(a, b)[0, 1] > 0.5  # a structure both seeds find, not noise
-    assert np.corrcoef(0.5 * (a + b), column.ravel())[0, 1] < -0.5
+    assert np.corrcoef(0.5 * (a + b), _column_haze(medium))[0, 1] < -0.5
     assert np.ptp(0.5 * (a + b)) > 0.1  # and it is not a small one
 
 
@@ -165,3 +180,18 @@ def test_a_ray_reads_the_profiles_light_times_its_cells_ratio():
     sigma = np.array([3.912 / 300.0])
     got, equivalent = ray_sums(medium, ones, sigma, starts, dirs, reach, view)
     np.testing.assert_allclose(got / equivalent, 1.0, atol=3e-3)
+
+
+def test_a_drifted_field_is_shielded_where_its_haze_has_drifted_to():
+    """The box reads the field drifted by ``travelled_m`` along the drift: the light under
+    the haze follows the drifted field's columns (``NonUniformHaze.density_at`` drifts them
+    too), not where the same patches lay before they drifted 300 m."""
+    from seahaze.haze_field import Drift
+
+    drift = Drift(speed_m_s=10.0, toward_deg=90.0, time_s=30.0)
+    moving = NonUniformHaze(SLAB, HazeField(patches=PATCHES, drift=drift), 1.0)
+    still = NonUniformHaze(SLAB, HazeField(patches=PATCHES), 1.0)
+    lowest = 0.5 * sum(_lowest_ratio(moving.field, 300.0, seed) for seed in (23, 24))
+    drifted = np.corrcoef(lowest, _column_haze(moving))[0, 1]
+    before = np.corrcoef(lowest, _column_haze(still))[0, 1]
+    assert drifted < -0.3 and before > drifted + 0.4
