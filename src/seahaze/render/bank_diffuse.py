@@ -84,18 +84,19 @@ def trace_bank(
     camera_xy: tuple[float, float],
     photons: int,
     seed: int,
-) -> tuple[Strip, StripFluence]:
-    """The bank's and its profile's diffuse fields (:func:`trace_strip`) at levels of
-    (green) extinction ``sigma`` (L,) in 1/m, lit by the Mitsuba emitters ``sun`` and ``sky``
-    (``photons`` per level, half from each) over the sea ``sea``. Levels are traced one after
-    the other (one kernel: the lanes of all levels at once would need gigabytes)."""
+) -> SourceTables:
+    """The bank's light (:class:`SourceTables`, from the bank's and its profile's diffuse
+    fields, :func:`trace_strip`) at levels of (green) extinction ``sigma`` (L,) in 1/m, lit by
+    the Mitsuba emitters ``sun`` and ``sky`` (``photons`` per level, half from each) over the
+    sea ``sea``. Levels are traced one after the other (one kernel: the lanes of all levels at
+    once would need gigabytes)."""
     strip = bank_strip(medium, camera_xy)
     top = medium.profile.top
     sources = [emitter_photons(e, photons // 2, seed + i, top) for i, e in enumerate((sun, sky))]
     traced = [trace_strip(*sources, sea, [float(k)], medium.profile, strip, seed) for k in sigma]
     bank = np.concatenate([t.bank for t in traced])
     profile = np.concatenate([t.profile for t in traced])
-    return strip, StripFluence(bank, profile)
+    return SourceTables.of(medium, strip, StripFluence(bank, profile))
 
 
 @dataclass(frozen=True)

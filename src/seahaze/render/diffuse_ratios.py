@@ -63,12 +63,11 @@ RATIO_GRID_PIXELS = 160 * 90
 """Most pixels whose ratios are summed (every ``n``-th row and column)."""
 SMOOTHING_CELLS = 4
 """Radius of the box filter (in cells of the ratios' grid, within each segment of the image)
-over the summed ratios. Neighbouring rays cross the same few cells of a field's tracer (a
-bank's strip) at nearby points, so
-the cells' photon noise runs in bands across the sky, a few grid rows apart and 1–2 % deep
-in 8-bit values at 2^18 photons; this radius (1/40 of the grid's width) flattens them, and
-the ratio itself changes little over it (it is an integral along each ray of a field that
-changes over hundreds of metres)."""
+over the summed ratios. Neighbouring rays cross the same few cells of a field's tracer at
+nearby points, so the cells' photon noise runs in bands across the sky (a bank's strip: a few
+grid rows apart and 1–2 % deep in 8-bit values at 2^18 photons); this radius (1/40 of the
+grid's width) flattens them, and the ratio itself changes little over it (it is an integral
+along each ray of a field that changes over hundreds of metres)."""
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 """Rec. 709 luminance: one ratio per level scales all three channels."""
 
@@ -94,11 +93,11 @@ def diffuse_ratios(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(L, H, W) each pixel's ``diffuse_air`` and ``diffuse_bounce`` ratios (module docstring)
     at levels of (green) extinction ``sigma`` (L,) in 1/m, from the field's light ``sources``
-    (:class:`FieldLight`), the pixels'
-    ``view`` ratios (H, W) and the sea's reflection samples; the later segments' equivalent
-    profile is the profile times ``later`` (H, W), the pixel's ratio for them, or where None
-    each reflected ray's own (as a bank's kernels measure it). Summed on a grid and spread
-    within the image's segments (:func:`spread_within_segments`)."""
+    (:class:`FieldLight`), the pixels' ``view`` ratios (H, W) and the sea's reflection
+    samples; the later segments' equivalent profile is the profile times ``later`` (H, W),
+    the pixel's ratio for them, or where None each reflected ray's own (as a bank's kernels
+    measure it). Summed on a grid and spread within the image's segments
+    (:func:`spread_within_segments`)."""
     height, width = view.shape
     step = max(1, math.ceil(math.sqrt(height * width / RATIO_GRID_PIXELS)))
     rows, cols = np.arange(0, height, step), np.arange(0, width, step)
@@ -189,7 +188,9 @@ def sea_bounce_ratios(
     """(L, N) the ``diffuse_bounce`` ratio of sea ``points`` (N, 3) seen along camera
     directions ``dirs`` (N, 3): the diffuse in-scattering along :data:`BOUNCE_RAYS` of the
     sea's reflected directions (its own samples for that incidence, each weighted by its
-    luminance) through the bank, over the same along each in its own equivalent profile."""
+    luminance) through the field, over the same along each in the equivalent profile of the
+    later segments (the profile times the point's ``later`` ratio (N,), or where None each
+    ray's own)."""
     if len(points) > BOUNCE_CHUNK:
         parts = range(0, len(points), BOUNCE_CHUNK)
         return np.concatenate(
@@ -235,8 +236,6 @@ def hull_bounce_ratios(
     directions ``dirs`` (N, 3): as :func:`sea_bounce_ratios`, over :data:`BOUNCE_RAYS`
     cosine-weighted directions about the hull's side that faces the camera (a matte side:
     the geometry pass keeps no normals). Rays that go down end at the sea."""
-    if len(points) == 0:
-        return np.ones((len(sigma), 0))
     travel = hull_directions(dirs)
     n, k = travel.shape[:2]
     starts = np.repeat(points, k, axis=0)

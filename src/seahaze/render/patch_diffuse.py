@@ -32,6 +32,7 @@ Import this module only once a Mitsuba variant is set.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -119,14 +120,27 @@ def trace_patches(
 
 @dataclass(frozen=True)
 class PatchLight:
-    """Per level, the box, the field's fluence over the profile's per cell ``R [x, y, z]``
-    and the profile's in-scattered luminance per metre and unit density toward the centre of
-    every direction bin ``[z, dir]`` (``ϖ Σ_b p Φ_b``)."""
+    """Per level, the box, the field's fluence over the profile's per cell and direction
+    group ``R [x, y, z, G]``, and each group's share of the profile's in-scattered luminance
+    per metre and unit density toward the centre of every direction bin ``[z, G, node]``
+    (``ϖ Σ_{b in G} p Φ_b``)."""
 
     medium: NonUniformHaze
     boxes: list[Box]
     ratio: list[np.ndarray]
     profile: list[np.ndarray]
+
+    @cached_property
+    def rows(self) -> list[np.ndarray]:
+        """Per level, the ratios as rows of G values per cell, in float32, and one more row of
+        ones for points outside the box (what :meth:`light` gathers; made once, read by
+        every ray sum of the frame)."""
+        return [
+            np.concatenate([r.reshape(-1, box.n_light), np.ones((1, box.n_light))]).astype(
+                np.float32
+            )
+            for r, box in zip(self.ratio, self.boxes, strict=True)
+        ]
 
     @classmethod
     def of(cls, medium: NonUniformHaze, boxes: list[Box], fluences: list[BoxFluence]) -> PatchLight:
@@ -156,10 +170,9 @@ class PatchLight:
         inside = (fx >= 0) & (fx < box.n_xy) & (fy >= 0) & (fy < box.n_xy)
         i_x = np.clip(fx, 0, box.n_xy - 1).astype(np.int64)
         i_y = np.clip(fy, 0, box.n_xy - 1).astype(np.int64)
-        # Rows of G values gathered at once (the cells', then a row of ones for points outside
-        # the box; each ray's light per height, found first: few, then read at its points).
-        cells = self.ratio[k].reshape(-1, box.n_light).astype(np.float32)
-        cells = np.concatenate([cells, np.ones((1, box.n_light), np.float32)])
+        # Rows of G values gathered at once; each ray's light per height found first (few),
+        # then read at its points (many).
+        cells = self.rows[k]
         cell = np.where(inside, (i_x * box.n_xy + i_y) * box.n_z + i_z, len(cells) - 1)
         nodes = light_nodes(box, travel)
         per_height = sum(
@@ -172,7 +185,7 @@ class PatchLight:
 
 
 def smooth_periodic(cube: np.ndarray, radius: int) -> np.ndarray:
-    """``cube`` [x, y, z] averaged over the (2 radius + 1)² columns about each, wrapping
+    """``cube`` [x, y, …] averaged over the (2 radius + 1)² columns about each, wrapping
     around the box's sides."""
     if radius <= 0:
         return cube

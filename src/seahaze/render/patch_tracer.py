@@ -4,13 +4,14 @@ Patches (:class:`seahaze.haze_field.Patches`) vary in all three dimensions, so t
 field is a function of position and direction. Tallied in as many cells as the strip of a
 bank (:mod:`seahaze.render.strip_tracer`) holds, a box of them would leave a few photons per
 cell and direction. What the patches change, though, is mostly how much light reaches a point
-(a dense patch shields its own inside from every side), far less the light's angular shape:
-this module tallies the field's scalar fluence ``Φ(x, y, z)`` per cell of a box around the
-camera, and the horizontally homogeneous profile's directional fluence ``Φ_v(z, dir)`` per
-height and direction bin (the diffuse tables' quantity,
+from above and from the sun's side, far less the light's angular shape within those: this
+module tallies the field's fluence ``Φ_G(x, y, z)`` per cell of a box around the camera in a
+few direction groups ``G`` (:attr:`Box.n_band` bands of ``μ`` × :attr:`Box.n_sector` sectors
+of azimuth), and the horizontally homogeneous profile's directional fluence ``Φ_v(z, dir)``
+per height and direction bin (the diffuse tables' quantity,
 :mod:`seahaze.render.diffuse_table`). :mod:`seahaze.render.patch_diffuse` takes the field's
-diffuse light as the profile's shaped by the ratio of the two at each cell,
-``Φ(x, y, z) / Φ_v(z)``.
+diffuse light as the profile's, each group's share scaled by the ratio of the two at each
+cell, ``Φ_G(x, y, z) / Φ_v,G(z)``.
 
 Method (the tables' physics with these differences, as the strip's):
 
@@ -23,9 +24,10 @@ Method (the tables' physics with these differences, as the strip's):
   irradiance times the box's area; free paths by delta tracking against the field's bound
   (``σ c √R max ρ_v``, or the profile's when larger); the first flight of a sun photon is
   direct light (the kernels' shadow rays), not tallied; track lengths tallied at
-  :data:`TRACK_POINTS` stratified points of every flight.
+  ``photon_tracer.TRACK_POINTS`` stratified points of every flight.
 * Every photon is traced through the field and through the profile alone with the same random
-  numbers (lanes of two families), so the two fluences' photon noise is largely shared.
+  numbers (a kernel for each, so the profile's lanes never evaluate the field), so the two
+  fluences' photon noise is largely shared.
 * Tallies are integers in fixed point, per-thread copies summed at the end: the same bytes
   whatever the thread order.
 
@@ -49,17 +51,15 @@ from .field_medium import field_bound, field_modulation, profile_bound
 from .photon_tracer import (
     FIXED_POINT,
     MAX_FLIGHTS,
+    TRACK_PACKET,
     SeaReflectance,
     SeaTables,
     downward_photons,
+    flight_bins,
     russian_roulette,
     scatter_or_reflect,
+    track_points,
 )
-
-TRACK_POINTS = 4
-"""Stratified points per flight at which its track length is tallied."""
-_PACKET = 4
-"""Integers per tally cell: R, G, B and a pad (one packet scatter)."""
 
 
 @dataclass(frozen=True)
@@ -113,8 +113,8 @@ class Box:
 
 @dataclass(frozen=True)
 class BoxFluence:
-    """The field's scalar fluence ``[level, x, y, z, rgb]`` and the profile's directional
-    fluence ``[level, z, dir, rgb]`` (W m⁻²), from the same photons."""
+    """The field's fluence per direction group ``[level, x, y, z, group, rgb]`` and the
+    profile's directional fluence ``[level, z, dir, rgb]`` (W m⁻²), from the same photons."""
 
     field: np.ndarray
     profile: np.ndarray
@@ -195,7 +195,7 @@ def _trace_family(
     z = dr.full(mi.Float, 1.0, dr.width(index)) * p.top
     tables = SeaTables(sea)
     cells = box.field_cells if in_field else box.profile_cells
-    tally = dr.zeros(mi.Int64, n_levels * cells * _PACKET)
+    tally = dr.zeros(mi.Int64, n_levels * cells * TRACK_PACKET)
     base = level * cells
     active = dr.max(w) > 0.0
     flights = dr.zeros(mi.UInt32, dr.width(index))
@@ -233,7 +233,7 @@ def _trace_family(
     dr.while_loop((x, y, z, *d, *w, direct, active, flights, rng), cond, body)
     dr.eval(tally)
     dr.sync_thread()  # wait with Python's lock let go: Ctrl-C's watcher (seahaze.interrupts)
-    return np.array(tally).reshape(n_levels, cells, _PACKET)[..., :3]
+    return np.array(tally).reshape(n_levels, cells, TRACK_PACKET)[..., :3]
 
 
 class _BoxParams:
@@ -269,25 +269,20 @@ class _BoxParams:
 
 def _tally(tally, base, in_field, x, y, z, d, w, step, u, active, p: _BoxParams) -> None:
     """Track length ``w ℓ`` of the flight from box point ``(x, y, z)`` along ``d`` for
-    ``step`` metres, at :data:`TRACK_POINTS` points stratified with the offset ``u``: into
-    each point's cell and μ band in the field (``in_field``), each point's height and
-    direction bin in the profile."""
+    ``step`` metres, at ``photon_tracer.TRACK_POINTS`` points stratified with the offset
+    ``u``: into each point's cell and direction group in the field (``in_field``), each
+    point's height and direction bin in the profile."""
     box = p.box
     dx, dy, dz = d
-    mu_bin = mi.UInt32(dr.clip(mi.Int32((dz + 1.0) * 0.5 * box.n_mu), 0, box.n_mu - 1))
-    phi = jit_haze.azimuth_fraction(dx, dy, 1.0, 0.0, folded=False)
-    phi_bin = mi.UInt32(dr.clip(mi.Int32(phi * box.n_phi), 0, box.n_phi - 1))
+    mu_bin, phi_bin = flight_bins(d, box.n_mu, box.n_phi, 1.0, 0.0)
     if in_field:  # the bin's group, as Box.groups
         band = mu_bin // (box.n_mu // box.n_band)
         group = band * box.n_sector + phi_bin // (box.n_phi // box.n_sector)
     else:
         dir_bin = mu_bin * box.n_phi + phi_bin
-    piece = step * (1.0 / TRACK_POINTS)
-    score = [mi.Int64(dr.round(c * piece * FIXED_POINT)) for c in w]
-    packet = mi.ArrayXi64([*score, mi.Int64(0)])
+    packet, points = track_points(w, step, u)
     last = box.n_xy - 1
-    for k in range(TRACK_POINTS):
-        t = (k + u) * piece
+    for t in points:
         cz = dr.clip(dr.fma(t, dz, z), 0.0, p.top) * p.inv_dz
         i_z = mi.UInt32(dr.clip(mi.Int32(cz), 0, box.n_z - 1))
         if in_field:

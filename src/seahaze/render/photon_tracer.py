@@ -252,6 +252,41 @@ def scatter_or_reflect(d, w, u, real, at_sea, albedo, g, tables: SeaTables) -> t
     return d, w
 
 
+TRACK_POINTS = 4
+"""Stratified points per flight at which the field tracers (a bank's strip, patches' box)
+tally its track length: the track-length estimator's expectation with far less noise than
+one point per tentative collision."""
+TRACK_PACKET = 4
+"""Integers per cell of the field tracers' tallies: R, G, B and a pad (one packet scatter)."""
+
+
+def track_points(w, step, u) -> tuple[object, list]:
+    """What each of :data:`TRACK_POINTS` points of a flight of ``step`` metres scores (the
+    packet of ``w ℓ / n`` in fixed point, R, G, B and a pad) and the points' distances along
+    the flight, stratified with the offset ``u`` (drjit; the field tracers' tally step)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    piece = step * (1.0 / TRACK_POINTS)
+    score = [mi.Int64(dr.round(c * piece * FIXED_POINT)) for c in w]
+    packet = mi.ArrayXi64([*score, mi.Int64(0)])
+    return packet, [(k + u) * piece for k in range(TRACK_POINTS)]
+
+
+def flight_bins(d, n_mu: int, n_phi: int, cos_ref, sin_ref) -> tuple[object, object]:
+    """The ``μ`` bin (``n_mu`` over ``[−1, 1]``) and azimuth bin (``n_phi`` over ``[−π, π)``
+    from the azimuth whose cosine and sine are ``cos_ref``, ``sin_ref``) of travel directions
+    ``d`` (drjit UInt32s; the field tracers' direction bins)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    dx, dy, dz = d
+    mu_bin = mi.UInt32(dr.clip(mi.Int32((dz + 1.0) * 0.5 * n_mu), 0, n_mu - 1))
+    phi = jit_haze.azimuth_fraction(dx, dy, cos_ref, sin_ref, folded=False)
+    phi_bin = mi.UInt32(dr.clip(mi.Int32(phi * n_phi), 0, n_phi - 1))
+    return mu_bin, phi_bin
+
+
 def downward_photons(d: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Of source photons (travel directions (n, 3), weights (n, 3)), those that travel down
     and carry energy (the sky below the horizon has none), as float64."""

@@ -228,10 +228,10 @@ class PhysicalRenderer:
     ) -> PixelRatios:
         """Each pixel's density ratios in the scene's field (:func:`pixel_ratios`) for levels
         of (green) extinction ``sigma`` (L,) in 1/m, from the geometry pass's pixel-centre rays
-        and the sun's direction; in a bank alone with the ``diffuse_air`` and ``diffuse_bounce``
-        ratios too (:mod:`seahaze.render.bank_diffuse`, its field traced from ``seed`` with
-        ``bank_photons`` per level; None: the settings' for the fewest table photons). Kept
-        for the frame's next render of the same levels and seed."""
+        and the sun's direction; in a bank alone or patches alone with the ``diffuse_air`` and
+        ``diffuse_bounce`` ratios too (:meth:`own_diffuse`, the field's light traced from
+        ``seed`` with ``bank_photons`` per level; None: the settings' for the fewest table
+        photons). Kept for the frame's next render of the same levels and seed."""
         assert self.field is not None
         key = (tuple(float(x) for x in sigma), seed, bank_photons)
         if key not in self._ratios:
@@ -240,49 +240,35 @@ class PhysicalRenderer:
             sun = sun_axis(self.sun)
             levels = np.asarray(key[0])
             ratios = pixel_ratios(self.field, self.geometry, sun, levels)
-            photons = bank_photons or self.settings.bank_photons_for(0)
-            if self.segments is not None:
-                air, bounce = self.bank_diffuse(ratios, levels, seed, photons)
-                ratios = replace(ratios, diffuse_air=air, diffuse_bounce=bounce)
-            elif self.field.field.bank is None and self.field.field.patches is not None:
-                air, bounce = self.patch_diffuse(ratios, levels, seed, photons)
+            field = self.field.field
+            if (field.bank is None) != (field.patches is None):  # a bank or patches alone
+                photons = bank_photons or self.settings.bank_photons_for(0)
+                air, bounce = self.own_diffuse(ratios, levels, seed, photons)
                 ratios = replace(ratios, diffuse_air=air, diffuse_bounce=bounce)
             self._ratios[key] = ratios
         return self._ratios[key]
 
-    def bank_diffuse(
+    def own_diffuse(
         self, ratios: PixelRatios, sigma: np.ndarray, seed: int, photons: int
     ) -> tuple[np.ndarray, np.ndarray]:
-        """(L, H, W) each pixel's ``diffuse_air`` and ``diffuse_bounce`` ratios in the scene's
-        bank (:mod:`seahaze.render.bank_diffuse`) at levels of (green) extinction ``sigma``,
-        the bank's field traced with ``photons`` per level from ``seed``."""
-        from . import bank_diffuse, diffuse_ratios  # a Mitsuba variant is set by now
+        """(L, H, W) each pixel's ``diffuse_air`` and ``diffuse_bounce`` ratios
+        (:mod:`seahaze.render.diffuse_ratios`) in the scene's bank alone
+        (:mod:`seahaze.render.bank_diffuse`) or patches alone
+        (:mod:`seahaze.render.patch_diffuse`) at levels of (green) extinction ``sigma``, the
+        field's light traced with ``photons`` per level from ``seed``."""
+        from . import bank_diffuse, diffuse_ratios, patch_diffuse  # a variant is set by now
 
         assert self.field is not None and self.geometry is not None
         origin = (float(self.geometry.origin[0]), float(self.geometry.origin[1]))
-        strip, fluence = bank_diffuse.trace_bank(
-            self.field, self.sun, self.sky, self.sea, sigma, origin, photons, seed
+        # A bank's later segments measure their own ratio; patches' take the pixel's bounce.
+        trace, later = (
+            (bank_diffuse.trace_bank, None)
+            if self.segments is not None
+            else (patch_diffuse.trace_patches, ratios.bounce)
         )
-        sources = bank_diffuse.SourceTables.of(self.field, strip, fluence)
+        sources = trace(self.field, self.sun, self.sky, self.sea, sigma, origin, photons, seed)
         return diffuse_ratios.diffuse_ratios(
-            self.field, self.geometry, ratios.view, sources, sigma, self.sea
-        )
-
-    def patch_diffuse(
-        self, ratios: PixelRatios, sigma: np.ndarray, seed: int, photons: int
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """(L, H, W) each pixel's ``diffuse_air`` and ``diffuse_bounce`` ratios in the scene's
-        patches (:mod:`seahaze.render.patch_diffuse`) at levels of (green) extinction
-        ``sigma``, the field traced with ``photons`` per level from ``seed``."""
-        from . import diffuse_ratios, patch_diffuse  # a Mitsuba variant is set by now
-
-        assert self.field is not None and self.geometry is not None
-        origin = (float(self.geometry.origin[0]), float(self.geometry.origin[1]))
-        sources = patch_diffuse.trace_patches(
-            self.field, self.sun, self.sky, self.sea, sigma, origin, photons, seed
-        )
-        return diffuse_ratios.diffuse_ratios(
-            self.field, self.geometry, ratios.view, sources, sigma, self.sea, ratios.bounce
+            self.field, self.geometry, ratios.view, sources, sigma, self.sea, later
         )
 
     def vessel_light(

@@ -20,9 +20,9 @@ Method (the tables' physics, :mod:`seahaze.render.diffuse_table`, with these dif
   the larger of ``c max(1, r)`` and 1): a tentative collision is real with probability
   density over that bound. The first flight of a sun
   photon is direct light (the kernels' shadow rays): it is not tallied, and it is not split.
-* Track lengths are tallied at :data:`TRACK_POINTS` stratified points of every flight, each
-  scoring ``w ℓ / n`` into its cell and direction bin: the track-length estimator's expectation
-  with far less noise than one point per tentative collision.
+* Track lengths are tallied at ``photon_tracer.TRACK_POINTS`` stratified points of every
+  flight, each scoring ``w ℓ / n`` into its cell and direction bin: the track-length
+  estimator's expectation with far less noise than one point per tentative collision.
 * Tallies are integers in fixed point, per-thread copies summed at the end (as the tables'
   tracer: the same bytes whatever the thread order).
 
@@ -45,23 +45,22 @@ from .field_medium import bank_step, profile_bound
 from .photon_tracer import (
     FIXED_POINT,
     MAX_FLIGHTS,
+    TRACK_PACKET,
     SeaReflectance,
     SeaTables,
     downward_photons,
+    flight_bins,
     russian_roulette,
     scatter_or_reflect,
+    track_points,
 )
 
-TRACK_POINTS = 4
-"""Stratified points per flight at which its track length is tallied."""
 PROFILE_STRIDE = 1
 """Every this-many-th photon is traced through the profile too. Only the profile's mean across
 the strip is used (it is horizontally uniform, and pools forty-odd cells), but its noise is
 common to every pixel's ratio: with one photon in 8, one render's region error at 1000 m
 scattered 1.5–1.7× more (sixteen strip seeds, the same render; the same at 300 m), for 0.8
 against 1.0 s per level at 2^20 photons."""
-_PACKET = 4
-"""Integers per tally cell: R, G, B and a pad (one packet scatter)."""
 
 
 @dataclass(frozen=True)
@@ -159,7 +158,7 @@ def trace_strip(
     s = p.launch_lo + rng.next_float32() * p.span
     z = dr.full(mi.Float, 1.0, dr.width(index)) * p.top
     tables = SeaTables(sea)
-    tally = dr.zeros(mi.Int64, 2 * n_levels * strip.cells * _PACKET)
+    tally = dr.zeros(mi.Int64, 2 * n_levels * strip.cells * TRACK_PACKET)
     base = (level * 2 + family) * strip.cells
     active = dr.max(w) > 0.0
     flights = dr.zeros(mi.UInt32, dr.width(index))
@@ -196,7 +195,7 @@ def trace_strip(
     dr.while_loop((s, z, *d, *w, direct, active, flights, rng), cond, body)
     dr.eval(tally)
     dr.sync_thread()  # wait with Python's lock let go: Ctrl-C's watcher (seahaze.interrupts)
-    sums = np.array(tally).reshape(n_levels, 2, strip.n_s, strip.n_z, strip.n_dir, _PACKET)
+    sums = np.array(tally).reshape(n_levels, 2, strip.n_s, strip.n_z, strip.n_dir, TRACK_PACKET)
     ds, dz_cell = (strip.s_hi - strip.s_lo) / strip.n_s, strip.top_m / strip.n_z
     # Fixed point → metres of track × weight; per cell volume (per metre of edge) → fluence.
     fluence = sums[..., :3].astype(np.float64) * (scale * span / (FIXED_POINT * ds * dz_cell))
@@ -231,20 +230,15 @@ class _StripParams:
 
 def _tally(tally, base, s, z, along, d, w, step, u, active, p: _StripParams) -> None:
     """Track length ``w ℓ`` of the flight from ``(s, z)`` along ``d`` (``along``: its component
-    on the bank's normal) for ``step`` metres, at :data:`TRACK_POINTS` points stratified with
-    the offset ``u``, into each point's cell and direction bin (points outside the strip's
-    ``s`` range score nothing)."""
+    on the bank's normal) for ``step`` metres, at ``photon_tracer.TRACK_POINTS`` points
+    stratified with the offset ``u``, into each point's cell and direction bin (points outside
+    the strip's ``s`` range score nothing)."""
     strip = p.strip
-    dx, dy, dz = d
-    mu_bin = mi.UInt32(dr.clip(mi.Int32((dz + 1.0) * 0.5 * strip.n_mu), 0, strip.n_mu - 1))
-    phi = jit_haze.azimuth_fraction(dx, dy, p.cos_n, p.sin_n, folded=False)
-    phi_bin = mi.UInt32(dr.clip(mi.Int32(phi * strip.n_phi), 0, strip.n_phi - 1))
+    dz = d[2]
+    mu_bin, phi_bin = flight_bins(d, strip.n_mu, strip.n_phi, p.cos_n, p.sin_n)
     dir_bin = mu_bin * strip.n_phi + phi_bin
-    piece = step * (1.0 / TRACK_POINTS)
-    score = [mi.Int64(dr.round(c * piece * FIXED_POINT)) for c in w]
-    packet = mi.ArrayXi64([*score, mi.Int64(0)])
-    for k in range(TRACK_POINTS):
-        t = (k + u) * piece
+    packet, points = track_points(w, step, u)
+    for t in points:
         cs = (dr.fma(t, along, s) - p.s_lo) * p.inv_ds
         cz = dr.clip(dr.fma(t, dz, z), 0.0, p.top) * p.inv_dz
         inside = active & (cs >= 0.0) & (cs < strip.n_s)
