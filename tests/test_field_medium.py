@@ -74,6 +74,24 @@ def test_the_kernels_density_is_the_fields(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", list(MEDIA))
+def test_the_float64_kernels_density_is_numpys(name: str) -> None:
+    """The render's medium evaluates its density at points in a drjit kernel
+    (``field_quadrature.kernel_density``, what the diffuse ratios' sums read): numpy's, in
+    float64, so to rounding, in the shape of its points."""
+    from seahaze.render.field_quadrature import with_kernel_quadrature
+
+    medium = MEDIA[name]
+    kernel = with_kernel_quadrature(medium)
+    assert kernel.point_density is not None and medium.point_density is None
+    points = _points(50_000, 8000.0, np.random.default_rng(9)).reshape(250, 200, 3)
+    want = medium.density_at(points[..., 0], points[..., 1], points[..., 2])
+    got = kernel.density_at(points[..., 0], points[..., 1], points[..., 2])
+    assert got.shape == want.shape
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-15)
+    assert np.ptp(want) > 0.5
+
+
+@pytest.mark.parametrize("name", list(MEDIA))
 def test_the_majorant_bounds_the_density_closely(name: str) -> None:
     medium = MEDIA[name]
     points = _points(400_000, 8000.0, np.random.default_rng(11))

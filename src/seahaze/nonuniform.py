@@ -61,6 +61,15 @@ MAX_POINTS_PER_CHUNK = 1 << 20
 """Quadrature points evaluated at once (about 0.3 GB of temporaries)."""
 
 
+class PointDensity(Protocol):
+    """``ρ = c ρ_v(z) m(x, y, z)`` (float64, the points' shape) of a :class:`NonUniformHaze` at
+    world points ``x``, ``y``, ``z`` (m, arrays of one shape)."""
+
+    def __call__(
+        self, medium: NonUniformHaze, x: np.ndarray, y: np.ndarray, z: np.ndarray
+    ) -> np.ndarray: ...
+
+
 class RayQuadrature(Protocol):
     """Sums a :class:`NonUniformHaze`'s quadrature: ``∫ c ρ_v m ds`` (m, (N,) float64) along
     each ray ``origins + s·directions`` ((N, 3), unit directions) over ``s`` from ``enter`` to
@@ -106,6 +115,10 @@ class NonUniformHaze(HazeMedium):
     quadrature: RayQuadrature | None = dataclass_field(default=None, compare=False, repr=False)
     """What sums the quadrature's points (:class:`RayQuadrature`); None: numpy, here. The
     render layer passes its drjit kernel (:mod:`seahaze.render.field_quadrature`)."""
+    point_density: PointDensity | None = dataclass_field(default=None, compare=False, repr=False)
+    """What evaluates :meth:`density_at` (:class:`PointDensity`); None: numpy, here. The
+    render layer passes its drjit kernel, the same formulas in float64 (its diffuse ratios
+    read millions of points a frame)."""
 
     @property
     def albedo(self) -> float:  # type: ignore[override]
@@ -130,6 +143,8 @@ class NonUniformHaze(HazeMedium):
     # -- the density and optical depths ------------------------------------------------------
     def density_at(self, x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
         """``ρ`` at world points (m), float64."""
+        if self.point_density is not None:
+            return self.point_density(self, x, y, z)
         vertical = np.asarray(self.profile.density(np.asarray(z, np.float64), NUMPY))
         return self.scale * vertical * self.field.modulation(x, y, z)
 

@@ -77,7 +77,11 @@ AIR_POINTS = 24
 cells that grow quadratically with distance (the thickest level's light comes from the first
 tens of metres, the clearest level's from kilometres)."""
 SUN_RATIO_NEWTON_STEPS = 12
-"""Newton steps of a level's ``sun_air`` ratio (quadratic convergence from a close start)."""
+"""Most Newton steps of a level's ``sun_air`` ratio (quadratic convergence from a close start:
+most levels stop at :data:`SUN_RATIO_TOLERANCE` well before)."""
+SUN_RATIO_TOLERANCE = 1e-12
+"""The logarithm of the mean transmittance toward the sun, matched to this on every ray (a
+relative 1e-12 of the transmittance) stops the Newton steps."""
 SUN_GRID_PIXELS = 320 * 180
 """Most pixels whose sun and bounce ratios are integrated (every ``n``-th row and column)."""
 
@@ -219,8 +223,11 @@ def level_sun_ratio(
     r = _ratio(np.sum(weight * field_depth, -1), np.sum(weight * profile_depth, -1))
     for _ in range(SUN_RATIO_NEWTON_STEPS):
         log_t = log_w - sigma * r[..., None] * profile_depth
-        value = _logsumexp(log_t) - target
-        share = np.exp(log_t - _logsumexp(log_t)[..., None])
+        total = _logsumexp(log_t)
+        value = total - target
+        if not np.any(np.abs(value) > SUN_RATIO_TOLERANCE):
+            break  # every ray's mean transmittance matched to the tolerance
+        share = np.exp(log_t - total[..., None])
         slope = -sigma * np.sum(share * profile_depth, axis=-1)
         r = np.where(slope < 0.0, r - value / np.where(slope < 0.0, slope, -1.0), r)
         r = np.maximum(r, 0.0)
