@@ -155,14 +155,15 @@ def eight_way_sea():
 
 
 def assert_same_plane_parallel_field(got: np.ndarray, want: np.ndarray, n_mu: int) -> None:
-    """Two directional fluences ``[z, dir, rgb]`` of the same plane-parallel haze from two
-    tracers (their own photon noise): every height's four bands of ``μ`` (summed over
-    azimuth) hold light and agree within 3 %, the totals within 0.5 %."""
+    """Two directional fluences ``[z, dir, channel]`` (R, G, B, or one of luminance) of the
+    same plane-parallel haze from two tracers (their own photon noise): every height's four
+    bands of ``μ`` (summed over azimuth) hold light and agree within 3 %, the totals within
+    0.5 %."""
 
     def bands(fluence: np.ndarray) -> np.ndarray:
-        n_z = fluence.shape[0]
-        by_mu = fluence.reshape(n_z, n_mu, -1, 3).sum(axis=2)
-        return by_mu.reshape(n_z, 4, n_mu // 4, 3).sum(axis=2)
+        n_z, channels = fluence.shape[0], fluence.shape[-1]
+        by_mu = fluence.reshape(n_z, n_mu, -1, channels).sum(axis=2)
+        return by_mu.reshape(n_z, 4, n_mu // 4, channels).sum(axis=2)
 
     assert np.all(bands(want) > 0.0)
     np.testing.assert_allclose(bands(got), bands(want), rtol=0.03)

@@ -16,6 +16,10 @@
 * The same seed gives the same bytes.
 * The light a ray reads is the profile's times the cell's ratio, the profile's outside the
   box; with every ratio 1 a ray's ``diffuse_air`` sum equals its equivalent profile's.
+* The field is traced at levels at most ``LEVEL_SPAN`` apart in extinction (300, 500, 1000,
+  2000 and 4000 m of the graded levels); a level between takes, at each column's centre, the
+  two bracketing levels' ratios interpolated in ``ln σ`` (the clearer one's alone where the
+  denser level's smaller box does not reach), and its own profile's light.
 """
 
 from __future__ import annotations
@@ -41,9 +45,10 @@ def _box(side: float = 3000.0, n_xy: int = 16, n_z: int = 6):
 
 
 def _trace(field: HazeField, sigma: float, scale: float, box, photons, seed: int):
-    from seahaze.render.patch_tracer import trace_box
+    from seahaze.render.patch_tracer import source_photons, trace_box
 
-    return trace_box(*photons, eight_way_sea(), [sigma], SLAB, field, scale, 0.0, box, seed)
+    sources = source_photons(*photons)
+    return trace_box(sources, eight_way_sea(), [sigma], SLAB, field, scale, 0.0, box, seed)
 
 
 def test_without_patches_the_fields_tally_is_the_profiles_to_the_integer():
@@ -54,19 +59,18 @@ def test_without_patches_the_fields_tally_is_the_profiles_to_the_integer():
     per_height = got.field[0].sum(axis=(0, 1)) / box.n_xy**2
     assert np.all(per_height > 0.0)
     one_hot = box.groups()[:, None] == np.arange(box.n_light)[None]
-    groups = np.einsum("zdc,dg->zgc", got.profile[0], one_hot)
+    groups = got.profile[0] @ one_hot
     np.testing.assert_allclose(per_height, groups, rtol=1e-12)
     # So the cells' ratios average 1 in every height and group (smoothing wraps around the
     # box, keeping the mean), and the groups' light adds up to the profile's whole light.
-    from seahaze.render.diffuse_ratios import LUMINANCE
     from seahaze.render.diffuse_table import TableGrid, phase_matrix
     from seahaze.render.patch_diffuse import PatchLight
 
     medium = NonUniformHaze(SLAB, HazeField(), 1.0)
-    light = PatchLight.of(medium, [box], [got])
+    light = PatchLight.of(medium, np.array([0.004]), [box], [got])
     np.testing.assert_allclose(light.ratio[0].mean(axis=(0, 1)), 1.0, rtol=1e-9)
     phase = phase_matrix(SLAB.g, TableGrid(box.n_z, box.n_mu, box.n_phi, folded=False)).T
-    whole = (got.profile[0] @ LUMINANCE) @ phase
+    whole = got.profile[0] @ phase
     np.testing.assert_allclose(light.profile[0].sum(axis=1), whole, rtol=1e-9)
     # Patches are not the profile: the same photons see another field.
     patchy = _trace(HazeField(patches=PATCHES), 0.004, 1.0, box, sun_and_sky_photons(4096, 1), 3)
@@ -83,10 +87,13 @@ def test_the_same_seed_gives_the_same_bytes():
 
 
 def _tables_tracer(photons, sigma: float, box, seed: int) -> np.ndarray:
+    """The diffuse tables' tracer's directional fluence ``[z, dir]``, in luminance (the
+    box's)."""
+    from seahaze.render.diffuse_ratios import LUMINANCE
     from seahaze.render.photon_tracer import Slab, trace_fluence
 
     slab = Slab(SLAB.top, SLAB.albedo, SLAB.g, 0.0, box.n_z, box.n_mu, box.n_phi, False)
-    return trace_fluence(*photons, eight_way_sea(), [sigma], slab, seed)[0]
+    return trace_fluence(*photons, eight_way_sea(), [sigma], slab, seed)[0] @ LUMINANCE
 
 
 def test_the_profile_field_is_the_diffuse_tables_tracers():
@@ -94,7 +101,7 @@ def test_the_profile_field_is_the_diffuse_tables_tracers():
     photons, box = sun_and_sky_photons(1 << 18, 4), _box()
     got = _trace(HazeField(), sigma, 1.0, box, photons, 11).profile[0]
     want = _tables_tracer(photons, sigma, box, 12)
-    assert_same_plane_parallel_field(got, want, box.n_mu)
+    assert_same_plane_parallel_field(got[..., None], want[..., None], box.n_mu)
 
 
 def test_a_uniform_field_is_the_plane_parallel_one_in_every_column():
@@ -102,10 +109,10 @@ def test_a_uniform_field_is_the_plane_parallel_one_in_every_column():
     photons, box = sun_and_sky_photons(1 << 18, 5), _box(n_xy=4)
     got = _trace(HazeField(), sigma, scale, box, photons, 13).field[0].sum(axis=3)
     want = _tables_tracer(photons, sigma * scale, box, 14).sum(axis=1)
-    for column in got.reshape(-1, box.n_z, 3):
+    for column in got.reshape(-1, box.n_z):
         np.testing.assert_allclose(column, want, rtol=0.04)
     # The columns the sun's side would leave dark in a closed box hold what the rest do.
-    by_column = got.sum(axis=(2, 3))
+    by_column = got.sum(axis=2)
     np.testing.assert_allclose(by_column, by_column.mean(), rtol=0.03)
 
 
@@ -117,14 +124,15 @@ def _lowest_ratio(field: HazeField, travelled_m: float, seed: int) -> np.ndarray
     """The lowest height's fluence ratio per column (smoothed over its neighbours) at 300 m,
     flattened, traced with ``seed``."""
     from seahaze.render.patch_diffuse import smooth_periodic
-    from seahaze.render.patch_tracer import trace_box
+    from seahaze.render.patch_tracer import source_photons, trace_box
 
     box, photons = _box(**_DENSE_BOX), sun_and_sky_photons(1 << 17, seed)
+    sources = source_photons(*photons)
     traced = trace_box(
-        *photons, eight_way_sea(), [3.912 / 300.0], SLAB, field, 1.0, travelled_m, box, seed
+        sources, eight_way_sea(), [3.912 / 300.0], SLAB, field, 1.0, travelled_m, box, seed
     )
-    lowest = smooth_periodic(traced.field[0, ..., 1].sum(axis=-1), 1)[..., 0]
-    return (lowest / traced.profile[0, 0, :, 1].sum()).ravel()
+    lowest = smooth_periodic(traced.field[0].sum(axis=-1), 1)[..., 0]
+    return (lowest / traced.profile[0, 0].sum()).ravel()
 
 
 def _column_haze(medium: NonUniformHaze) -> np.ndarray:
@@ -195,3 +203,65 @@ def test_a_drifted_field_is_shielded_where_its_haze_has_drifted_to():
     drifted = np.corrcoef(lowest, _column_haze(moving))[0, 1]
     before = np.corrcoef(lowest, _column_haze(still))[0, 1]
     assert drifted < -0.3 and before > drifted + 0.4
+
+
+def test_the_field_is_traced_at_levels_at_most_a_span_apart():
+    from seahaze.render.patch_diffuse import LEVEL_SPAN, traced_levels
+    from seahaze.visibility import GRADED_LEVELS_M
+
+    graded = np.array(GRADED_LEVELS_M, float)
+    sigma = 3.912 / graded
+    traced = traced_levels(sigma)
+    assert LEVEL_SPAN == 2.0
+    assert [int(graded[k]) for k in traced] == [300, 500, 1000, 2000, 4000]
+    # In any order of levels the same ones, the densest and the clearest among them.
+    shuffled = np.random.default_rng(2).permutation(len(sigma))
+    assert sorted(graded[shuffled][traced_levels(sigma[shuffled])]) == list(graded[traced])
+    # Levels further apart than the span are each traced; one level alone is.
+    assert traced_levels(np.array([0.02, 0.004, 0.001])) == [0, 1, 2]
+    assert traced_levels(np.array([0.01])) == [0]
+
+
+def _patch_light(sigma: np.ndarray, traced: list[int]):
+    """A PatchLight of levels ``sigma`` in their own boxes, its ratios read from random
+    fluences, the field's only at levels ``traced``."""
+    from seahaze.render.patch_diffuse import PatchLight, patch_box
+    from seahaze.render.patch_tracer import BoxFluence
+
+    medium = NonUniformHaze(SLAB, HazeField(patches=PATCHES), 1.0)
+    boxes = [patch_box(medium, (120.0, -40.0), float(s)) for s in sigma]
+    rng = np.random.default_rng(4)
+    fluences = []
+    for k, box in enumerate(boxes):
+        field = rng.random((1, box.n_xy, box.n_xy, box.n_z, box.n_light)) + 0.5
+        profile = rng.random((1, box.n_z, box.n_dir)) + 0.5
+        fluences.append(BoxFluence(field if k in traced else None, profile))
+    return PatchLight.of(medium, sigma, boxes, fluences), boxes
+
+
+def test_a_level_between_traced_ones_blends_their_ratios_in_log_extinction():
+    sigma = 3.912 / np.array([300.0, 400.0, 600.0])
+    light, boxes = _patch_light(sigma, [0, 2])
+    t = np.log(sigma[0] / sigma[1]) / np.log(sigma[0] / sigma[2])
+    assert 0.41 < t < 0.42  # (in σ itself it would be 0.5)
+    mid, near, far = boxes[1], boxes[0], boxes[2]
+    assert near.side_m < mid.side_m < far.side_m
+    # Each column's centre looked up in the two traced boxes by hand.
+    size = mid.side_m / mid.n_xy
+    for i, j in [(mid.n_xy // 2, mid.n_xy // 2 + 3), (1, 2), (mid.n_xy - 1, 0)]:
+        x, y = mid.x0 + (i + 0.5) * size, mid.y0 + (j + 0.5) * size
+        values, weights = [], []
+        for box, ratio, share in ((near, light.ratio[0], 1.0 - t), (far, light.ratio[2], t)):
+            u, v = (x - box.x0) / box.side_m * box.n_xy, (y - box.y0) / box.side_m * box.n_xy
+            if 0.0 <= u < box.n_xy and 0.0 <= v < box.n_xy:
+                values.append(share * ratio[int(u), int(v)])
+                weights.append(share)
+        # The centre column lies in both boxes; the corners only in the clearer one's.
+        assert len(weights) == (2 if (i, j) == (mid.n_xy // 2, mid.n_xy // 2 + 3) else 1)
+        np.testing.assert_allclose(light.ratio[1][i, j], sum(values) / sum(weights), rtol=1e-12)
+    # The traced levels keep their own ratios; the blended level its own profile's light.
+    traced, _ = _patch_light(sigma, [0, 1, 2])
+    for k in (0, 2):
+        np.testing.assert_array_equal(light.ratio[k], traced.ratio[k])
+    np.testing.assert_array_equal(light.profile[1], traced.profile[1])
+    assert not np.allclose(light.ratio[1], traced.ratio[1])

@@ -96,11 +96,11 @@ strip traced and the ratios' grid summed (0.7–1.7 s per level for 2^20 photons
 machine, the first of a process compiling the strip's kernel; docs/benchmarks.md, "How close
 is physical in a fog bank?")."""
 
-PATCH_PHOTON_S = 4.0e-06
-"""The same for patches alone: their box traced (both families) and the ratios' grid summed
-(at 1280×720, 2^20 photons per level: the 11 graded levels' boxes 30 s, denser levels longer,
-and the sums 17 s; docs/benchmarks.md, "What the physical mode's equivalent profiles
-cost")."""
+PATCH_PHOTON_S = 2.0e-06
+"""The same for patches alone: their box traced (the profile at every level, the field at
+levels a factor 2 apart) and the ratios' grid summed (at 1280×720, 2^20 photons per level:
+the 11 graded levels' boxes about 15 s, denser levels longer, and the sums about 8 s;
+docs/benchmarks.md, "What the physical mode's equivalent profiles cost")."""
 
 VALIDATED_FROM_M = {"physical": 100.0}
 """Thinnest visibility (m) down to which the mode is within 3 % of converged ``reference``

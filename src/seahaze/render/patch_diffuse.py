@@ -31,6 +31,7 @@ Import this module only once a Mitsuba variant is set.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -38,9 +39,9 @@ from typing import Any
 import numpy as np
 
 from ..nonuniform import RAY_REACH_M, NonUniformHaze
-from .diffuse_ratios import LUMINANCE, light_nodes
+from .diffuse_ratios import light_nodes
 from .diffuse_table import TableGrid, phase_matrix
-from .patch_tracer import Box, BoxFluence, trace_box
+from .patch_tracer import Box, BoxFluence, source_photons, trace_box
 from .photon_sources import emitter_photons
 from .photon_tracer import SeaReflectance
 
@@ -59,6 +60,13 @@ sea."""
 SECTORS = 4
 """…and this many sectors of azimuth: a patch between a point and the sun cuts the light that
 travels away from the sun more than the rest."""
+LEVEL_SPAN = 2.0
+"""The field is traced at levels whose extinctions are at most this factor apart (the densest
+and the clearest always: 300, 500, 1000, 2000 and 4000 m of the graded levels); a level
+between takes its ratios from the two traced levels that bracket it, interpolated in
+``ln σ`` (:func:`blended_ratio`), and traces its profile's light alone. The field's tracer
+is most of what patches cost; what the interpolation changes against tracing every level is
+in docs/benchmarks.md ("How close is physical in drifting patches?")."""
 SMOOTHING_CELLS = 1
 """Radius of the box filter over each height's ratios ``R`` (periodic, as the box): the cells'
 photon noise averaged over their neighbours."""
@@ -94,16 +102,20 @@ def trace_patches(
 ) -> PatchLight:
     """The patches' light (:class:`PatchLight`) at levels of (green) extinction ``sigma``
     (L,) in 1/m, lit by the Mitsuba emitters ``sun`` and ``sky`` (``photons`` per level, half
-    from each) over the sea ``sea``; levels traced one after the other, each in its own box."""
+    from each) over the sea ``sea``; levels traced one after the other, each in its own box,
+    the field's photons only at :func:`traced_levels` (the profile's at every level)."""
     top = medium.profile.top
-    sources = [emitter_photons(e, photons // 2, seed + i, top) for i, e in enumerate((sun, sky))]
+    sources = source_photons(
+        *(emitter_photons(e, photons // 2, seed + i, top) for i, e in enumerate((sun, sky)))
+    )
     drift = medium.field.drift
     travelled = drift.speed_m_s * drift.time_s
+    traced = traced_levels(sigma)
     boxes, fluences = [], []
-    for level in sigma:
+    for k, level in enumerate(sigma):
         box = patch_box(medium, camera_xy, float(level))
         fluence = trace_box(
-            *sources,
+            sources,
             sea,
             [float(level)],
             medium.profile,
@@ -112,10 +124,27 @@ def trace_patches(
             travelled,
             box,
             seed,
+            with_field=k in traced,
         )
         boxes.append(box)
         fluences.append(fluence)
-    return PatchLight.of(medium, boxes, fluences)
+    return PatchLight.of(medium, sigma, boxes, fluences)
+
+
+def traced_levels(sigma: np.ndarray) -> list[int]:
+    """The indices of the levels of extinction ``sigma`` (L,) whose field is traced: the
+    densest, then from each traced level the clearest one at most :data:`LEVEL_SPAN` times
+    clearer (at least the next clearer level), down to the clearest."""
+    order = [int(i) for i in np.argsort(-np.asarray(sigma), kind="stable")]
+    traced = [order[0]]
+    at = 0
+    while at < len(order) - 1:
+        last = float(sigma[order[at]])
+        at += 1
+        while at < len(order) - 1 and last <= LEVEL_SPAN * float(sigma[order[at + 1]]):
+            at += 1
+        traced.append(order[at])
+    return sorted(traced)
 
 
 @dataclass(frozen=True)
@@ -142,22 +171,48 @@ class PatchLight:
             for r, box in zip(self.ratio, self.boxes, strict=True)
         ]
 
+    @cached_property
+    def by_node(self) -> list[np.ndarray]:
+        """Per level, the groups' light toward each direction bin's centre, laid out as
+        ``[node, z, group]`` in float32 (each ray's bins read as whole rows; made once)."""
+        return [np.ascontiguousarray(p.transpose(2, 0, 1), np.float32) for p in self.profile]
+
     @classmethod
-    def of(cls, medium: NonUniformHaze, boxes: list[Box], fluences: list[BoxFluence]) -> PatchLight:
-        ratios, profiles = [], []
+    def of(
+        cls,
+        medium: NonUniformHaze,
+        sigma: np.ndarray,
+        boxes: list[Box],
+        fluences: list[BoxFluence],
+    ) -> PatchLight:
+        """The light of levels of extinction ``sigma`` (L,) from their ``boxes`` and traced
+        ``fluences``: a level whose field was not traced takes its ratios from the traced
+        levels that bracket it (:func:`blended_ratio`), its profile's light its own."""
+        ratios: list[np.ndarray | None] = []
+        profiles = []
         for box, fluence in zip(boxes, fluences, strict=True):
             grid = TableGrid(box.n_z, box.n_mu, box.n_phi, folded=False)
             phase = phase_matrix(float(medium.profile.g), grid).T  # [bin, node]
-            field = fluence.field[0] @ LUMINANCE  # [x, y, z, group]
-            flat = fluence.profile[0] @ LUMINANCE  # [z, dir]
+            flat = fluence.profile[0]  # [z, dir], luminance
             one_hot = box.groups()[:, None] == np.arange(box.n_light)[None]  # [dir, group]
+            # Each group's light toward every node: [z, group, node].
+            profiles.append(np.einsum("zd,dg,dn->zgn", flat, one_hot, phase, optimize=True))
+            if fluence.field is None:
+                ratios.append(None)
+                continue
             scalar = flat @ one_hot  # [z, group]
-            field = smooth_periodic(field, SMOOTHING_CELLS)
+            field = smooth_periodic(fluence.field[0], SMOOTHING_CELLS)  # [x, y, z, group]
             fine = scalar > 0.0
             ratios.append(np.where(fine, field / np.where(fine, scalar, 1.0), 1.0))
-            # Each group's light toward every node: [z, group, node].
-            profiles.append(np.einsum("zd,dg,dn->zgn", flat, one_hot, phase))
-        return cls(medium, boxes, ratios, profiles)
+        traced = [k for k, r in enumerate(ratios) if r is not None]
+        for k, ratio in enumerate(ratios):
+            if ratio is None:
+                denser = min((i for i in traced if sigma[i] >= sigma[k]), key=lambda i: sigma[i])
+                clearer = max((i for i in traced if sigma[i] <= sigma[k]), key=lambda i: sigma[i])
+                near, far = (boxes[denser], ratios[denser]), (boxes[clearer], ratios[clearer])
+                t = _log_fraction(sigma[denser], sigma[k], sigma[clearer])
+                ratios[k] = blended_ratio(boxes[k], near, far, t)
+        return cls(medium, boxes, [r for r in ratios if r is not None], profiles)
 
     def light(self, k: int, x: Any, y: Any, z: Any, travel: np.ndarray):
         """(N, P) level ``k``'s source ``J`` (per unit ``σ ρ``) at world points ``x``, ``y``,
@@ -165,23 +220,64 @@ class PatchLight:
         profile's."""
         box = self.boxes[k]
         i_z = np.clip(z * (box.n_z / box.top_m), 0, box.n_z - 1).astype(np.int64)
-        fx = (x - box.x0) * (box.n_xy / box.side_m)
-        fy = (y - box.y0) * (box.n_xy / box.side_m)
-        inside = (fx >= 0) & (fx < box.n_xy) & (fy >= 0) & (fy < box.n_xy)
-        i_x = np.clip(fx, 0, box.n_xy - 1).astype(np.int64)
-        i_y = np.clip(fy, 0, box.n_xy - 1).astype(np.int64)
+        i_x, i_y, inside = box_columns(box, x, y)
         # Rows of G values gathered at once; each ray's light per height found first (few),
         # then read at its points (many).
         cells = self.rows[k]
         cell = np.where(inside, (i_x * box.n_xy + i_y) * box.n_z + i_z, len(cells) - 1)
-        nodes = light_nodes(box, travel)
+        by_node = self.by_node[k]
         per_height = sum(
-            w[:, None, None] * self.profile[k][:, :, n].transpose(2, 0, 1) for n, w in nodes
-        ).astype(np.float32)  # [N, z, G]
+            w.astype(np.float32)[:, None, None] * by_node[n] for n, w in light_nodes(box, travel)
+        )  # [N, z, G]
         row = np.arange(len(travel))[:, None] * box.n_z + i_z
-        groups = per_height.reshape(-1, box.n_light)[row]  # [N, P, G]
-        true = np.einsum("npg,npg->np", cells[cell], groups)
-        return true.astype(np.float64), groups.sum(axis=-1, dtype=np.float64)
+        # (np.take: numpy's fancy indexing of rows by a 2-D index is several times slower.)
+        groups = np.take(per_height.reshape(-1, box.n_light), row, axis=0)  # [N, P, G]
+        true = np.einsum("npg,npg->np", np.take(cells, cell, axis=0), groups)
+        # The profile's light: each height's groups summed once per ray, then read per point.
+        flat = per_height.sum(axis=-1, dtype=np.float64).reshape(-1)[row]
+        return true.astype(np.float64), flat
+
+
+def box_columns(box: Box, x: Any, y: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The column indices of world points ``x``, ``y`` in ``box`` (clipped to its sides) and
+    whether each lies inside it."""
+    fx = (np.asarray(x) - box.x0) * (box.n_xy / box.side_m)
+    fy = (np.asarray(y) - box.y0) * (box.n_xy / box.side_m)
+    inside = (fx >= 0) & (fx < box.n_xy) & (fy >= 0) & (fy < box.n_xy)
+    i_x = np.clip(fx, 0, box.n_xy - 1).astype(np.int64)
+    i_y = np.clip(fy, 0, box.n_xy - 1).astype(np.int64)
+    return i_x, i_y, inside
+
+
+def blended_ratio(
+    box: Box,
+    near: tuple[Box, np.ndarray],
+    far: tuple[Box, np.ndarray],
+    t: float,
+) -> np.ndarray:
+    """The ratios ``[x, y, z, group]`` of a level whose field was not traced, in its own
+    ``box``: at each column's centre, ``(1 − t)`` times the denser traced level's ratio
+    (``near``: its box and ratios) plus ``t`` times the clearer one's (``far``); where the
+    centre lies in only one of their boxes, that box's ratio; in neither, 1. All the boxes
+    share their heights and direction groups."""
+    centres = box.x0 + (np.arange(box.n_xy) + 0.5) * (box.side_m / box.n_xy)
+    across = box.y0 + (np.arange(box.n_xy) + 0.5) * (box.side_m / box.n_xy)
+    x, y = np.meshgrid(centres, across, indexing="ij")
+    total = np.zeros((box.n_xy, box.n_xy, box.n_z, box.n_light))
+    weight = np.zeros((box.n_xy, box.n_xy, 1, 1))
+    for (other, ratio), share in ((near, 1.0 - t), (far, t)):
+        i_x, i_y, inside = box_columns(other, x, y)
+        w = np.where(inside, share, 0.0)[..., None, None]
+        total += w * ratio[i_x, i_y]
+        weight += w
+    return np.where(weight > 0.0, total / np.where(weight > 0.0, weight, 1.0), 1.0)
+
+
+def _log_fraction(denser: float, sigma: float, clearer: float) -> float:
+    """Where extinction ``sigma`` lies between ``denser`` (0) and ``clearer`` (1), in
+    ``ln σ``."""
+    span = math.log(denser / clearer)
+    return math.log(denser / sigma) / span if span > 0.0 else 0.0
 
 
 def smooth_periodic(cube: np.ndarray, radius: int) -> np.ndarray:

@@ -21,13 +21,17 @@ Method (the tables' physics with these differences, as the strip's):
   field on one side does not continue the field on the other, lies at the box's edge, far
   (several mean free paths) from the haze a camera ray sees.
 * Photons enter the box's top at a uniformly random point carrying the source's horizontal
-  irradiance times the box's area; free paths by delta tracking against the field's bound
-  (``σ c √R max ρ_v``, or the profile's when larger); the first flight of a sun photon is
-  direct light (the kernels' shadow rays), not tallied; track lengths tallied at
-  ``photon_tracer.TRACK_POINTS`` stratified points of every flight.
-* Every photon is traced through the field and through the profile alone with the same random
-  numbers (a kernel for each, so the profile's lanes never evaluate the field), so the two
-  fluences' photon noise is largely shared.
+  irradiance times the box's area; free paths by delta tracking against the density's bound
+  (the field's ``σ c √R max ρ_v``, the profile's ``σ max ρ_v``); the first flight of a sun
+  photon is direct light (the kernels' shadow rays), not tallied; the luminance of its track
+  length tallied at ``photon_tracer.TRACK_POINTS`` stratified points of every flight (all
+  that :mod:`seahaze.render.patch_diffuse` reads, one integer per cell).
+* The same source photons are traced through the field and through the profile alone, each
+  in a kernel of its own and against its own bound: the profile's lanes never evaluate the
+  field, nor take the field's null collisions (about ``c √R`` per real one, 5 in patches of
+  ratio 30). Their random numbers then differ, which costs nothing measurable: the profile's
+  fluence is summed over all the box's columns, its noise far below a cell's. Without
+  patches the two bounds are the same, and so are the two tallies, to the integer.
 * Tallies are integers in fixed point, per-thread copies summed at the end: the same bytes
   whatever the thread order.
 
@@ -47,11 +51,11 @@ import numpy as np
 from ..haze_field import HazeField
 from ..medium import HazeMedium, drjit_ops
 from . import jit_haze
+from .diffuse_ratios import LUMINANCE
 from .field_medium import field_bound, field_modulation, profile_bound
 from .photon_tracer import (
     FIXED_POINT,
     MAX_FLIGHTS,
-    TRACK_PACKET,
     SeaReflectance,
     SeaTables,
     downward_photons,
@@ -113,16 +117,42 @@ class Box:
 
 @dataclass(frozen=True)
 class BoxFluence:
-    """The field's fluence per direction group ``[level, x, y, z, group, rgb]`` and the
-    profile's directional fluence ``[level, z, dir, rgb]`` (W m⁻²), from the same photons."""
+    """The luminance of the field's fluence per direction group ``[level, x, y, z, group]``
+    (None where only the profile was traced) and of the profile's directional fluence
+    ``[level, z, dir]`` (W m⁻², Rec. 709 luminance), from the same source photons."""
 
-    field: np.ndarray
+    field: np.ndarray | None
     profile: np.ndarray
 
 
+@dataclass(frozen=True)
+class SourcePhotons:
+    """The sun's and the sky's photons that travel down and carry energy: travel directions
+    ``d`` (n, 3) and weights ``w`` (n, 3) normalised by ``scale`` (W m⁻² per photon of the
+    box's area), the first ``n_sun`` the sun's. Made once per frame, read by every level's
+    box."""
+
+    d: np.ndarray
+    w: np.ndarray
+    n_sun: int
+    scale: float
+
+
+def source_photons(
+    sun: tuple[np.ndarray, np.ndarray], sky: tuple[np.ndarray, np.ndarray]
+) -> SourcePhotons:
+    """:class:`SourcePhotons` of the source photons ``sun`` and ``sky`` (travel directions and
+    horizontal irradiance weights, numpy, as
+    :func:`seahaze.render.photon_sources.emitter_photons`)."""
+    sun_d, sun_w = downward_photons(*sun)
+    sky_d, sky_w = downward_photons(*sky)
+    d, w = np.concatenate([sun_d, sky_d]), np.concatenate([sun_w, sky_w])
+    scale = float(w.max(axis=1).mean()) if len(d) else 0.0
+    return SourcePhotons(d, w / scale if scale > 0.0 else w, len(sun_d), scale)
+
+
 def trace_box(
-    sun: tuple[np.ndarray, np.ndarray],
-    sky: tuple[np.ndarray, np.ndarray],
+    sources: SourcePhotons,
     sea: SeaReflectance,
     sigmas: Sequence[float],
     profile: HazeMedium,
@@ -131,41 +161,39 @@ def trace_box(
     travelled_m: float,
     box: Box,
     seed: int,
+    with_field: bool = True,
 ) -> BoxFluence:
     """The field's (``scale · ρ_v · m``, ``m`` of ``field`` drifted ``travelled_m`` metres)
     and its profile's diffuse fields at every extinction in ``sigmas`` (1/m per unit density,
-    each > 0) of ``profile``'s optics in ``box``'s cells, from the source photons ``sun`` and
-    ``sky`` (downward travel directions and horizontal irradiance weights, numpy, as
-    :func:`seahaze.render.photon_sources.emitter_photons`)."""
-    sun_d, sun_w = downward_photons(*sun)
-    sky_d, sky_w = downward_photons(*sky)
-    d_all, w_all = np.concatenate([sun_d, sky_d]), np.concatenate([sun_w, sky_w])
-    n_photons, n_sun, n_levels = len(d_all), len(sun_d), len(sigmas)
-    field_shape = (n_levels, box.n_xy, box.n_xy, box.n_z, box.n_light, 3)
-    profile_shape = (n_levels, box.n_z, box.n_dir, 3)
-    scale_w = float(w_all.max(axis=1).mean()) if n_photons else 0.0
-    if n_photons == 0 or scale_w <= 0.0 or n_levels == 0:
-        return BoxFluence(np.zeros(field_shape), np.zeros(profile_shape))
-
-    p = _BoxParams(box, profile, field, scale, travelled_m)
-    sums = [
-        _trace_family(in_field, d_all, w_all / scale_w, n_sun, sigmas, profile, field, p, sea, seed)
-        for in_field in (True, False)
-    ]
-    sums = [s.astype(np.float64) * (scale_w * box.side_m**2 / FIXED_POINT) for s in sums]
+    each > 0) of ``profile``'s optics in ``box``'s cells, from the ``sources``' photons; the
+    profile's alone (``field`` None in the result) unless ``with_field``."""
+    n_levels = len(sigmas)
+    field_shape = (n_levels, box.n_xy, box.n_xy, box.n_z, box.n_light)
+    profile_shape = (n_levels, box.n_z, box.n_dir)
+    families = (True, False) if with_field else (False,)
+    if len(sources.d) == 0 or sources.scale <= 0.0 or n_levels == 0:
+        sums = {f: np.zeros(field_shape if f else profile_shape) for f in families}
+    else:
+        p = _BoxParams(box, profile, field, scale, travelled_m)
+        sums = {
+            f: _trace_family(f, sources, sigmas, profile, field, p, sea, seed)
+            * (sources.scale * box.side_m**2 / FIXED_POINT)
+            for f in families
+        }
     cell = box.side_m / box.n_xy
     dz_cell = box.top_m / box.n_z
     # Track length × weight per cell volume → fluence.
-    field_fluence = sums[0] / (cell * cell * dz_cell)
-    profile_fluence = sums[1] / (box.side_m**2 * dz_cell)
-    return BoxFluence(field_fluence.reshape(field_shape), profile_fluence.reshape(profile_shape))
+    field_fluence = sums[True] / (cell * cell * dz_cell) if with_field else None
+    profile_fluence = sums[False] / (box.side_m**2 * dz_cell)
+    return BoxFluence(
+        None if field_fluence is None else field_fluence.reshape(field_shape),
+        profile_fluence.reshape(profile_shape),
+    )
 
 
 def _trace_family(
     in_field: bool,
-    d_all: np.ndarray,
-    w_all: np.ndarray,
-    n_sun: int,
+    sources: SourcePhotons,
     sigmas: Sequence[float],
     profile: HazeMedium,
     field: HazeField,
@@ -173,12 +201,12 @@ def _trace_family(
     sea: SeaReflectance,
     seed: int,
 ) -> np.ndarray:
-    """The fixed-point tallies ``[level, cell, rgb]`` of every photon (directions ``d_all``,
-    weights ``w_all``, the first ``n_sun`` the sun's) traced through the field (``in_field``)
-    or through the profile alone: one kernel per family, so the profile's lanes never
-    evaluate the field. A photon draws the same random numbers in both (its stream is its
-    index, the majorant the same)."""
+    """The fixed-point luminance tallies ``[level, cell]`` (as float64) of every photon of
+    ``sources`` traced through the field (``in_field``) or through the profile alone, each
+    family in a kernel of its own against its own bound (a photon's random stream is its
+    index)."""
     box = p.box
+    d_all, w_all, n_sun = sources.d, sources.w, sources.n_sun
     n_photons, n_levels = len(d_all), len(sigmas)
     index = dr.arange(mi.UInt32, n_levels * n_photons)
     level = index // dr.opaque(mi.UInt32, n_photons)
@@ -189,13 +217,14 @@ def _trace_family(
     rng = mi.PCG32(dr.width(index))
     rng.seed(dr.opaque(mi.UInt64, seed) + mi.UInt64(photon), mi.UInt64(photon))
     sigma = dr.gather(mi.Float, jit_haze.padded_floats(np.asarray(sigmas)), level)
-    majorant = sigma * p.bound
+    bound = p.bound if in_field else p.profile_bound
+    majorant = sigma * bound
     x = rng.next_float32() * p.side
     y = rng.next_float32() * p.side
     z = dr.full(mi.Float, 1.0, dr.width(index)) * p.top
     tables = SeaTables(sea)
     cells = box.field_cells if in_field else box.profile_cells
-    tally = dr.zeros(mi.Int64, n_levels * cells * TRACK_PACKET)
+    tally = dr.zeros(mi.Int64, n_levels * cells)
     base = level * cells
     active = dr.max(w) > 0.0
     flights = dr.zeros(mi.UInt32, dr.width(index))
@@ -219,7 +248,7 @@ def _trace_family(
         if in_field:
             world = SimpleNamespace(x=x_end + p.x0, y=y_end + p.y0, z=z_end)
             density = density * p.scale * field_modulation(field, world, p.travelled)
-        real = collide & (u[1] * p.bound < density)
+        real = collide & (u[1] * bound < density)
         at_sea = ~collide & (dz < 0)
         d, w = scatter_or_reflect(d, w, u[2:5], real, at_sea, p.albedo, p.g, tables)
         z = dr.select(at_sea, 0.0, z_end)
@@ -233,7 +262,7 @@ def _trace_family(
     dr.while_loop((x, y, z, *d, *w, direct, active, flights, rng), cond, body)
     dr.eval(tally)
     dr.sync_thread()  # wait with Python's lock let go: Ctrl-C's watcher (seahaze.interrupts)
-    return np.array(tally).reshape(n_levels, cells, TRACK_PACKET)[..., :3]
+    return np.array(tally).astype(np.float64).reshape(n_levels, cells)
 
 
 class _BoxParams:
@@ -256,8 +285,8 @@ class _BoxParams:
         self.top = opaque(box.top_m)
         self.scale = opaque(scale)
         self.travelled = opaque(travelled_m)
-        densest = max(scale * field_bound(field), 1.0) * profile_bound(profile)
-        self.bound = opaque(densest)
+        self.profile_bound = opaque(profile_bound(profile))
+        self.bound = opaque(scale * field_bound(field) * profile_bound(profile))
         self.albedo, self.g = opaque(profile.albedo), opaque(profile.g)
         self.inv_cell = opaque(box.n_xy / box.side_m)
         self.inv_dz = opaque(box.n_z / box.top_m)
@@ -265,6 +294,14 @@ class _BoxParams:
     def wrap(self, v):
         """A horizontal box coordinate brought back into ``[0, side)`` (periodic box)."""
         return v - dr.floor(v * self.inv_side) * self.side
+
+
+def luminance(w):
+    """The Rec. 709 luminance of drjit weights ``w`` (R, G, B): what the box tallies, since
+    :mod:`seahaze.render.patch_diffuse` reads only the luminance of the fluence (one integer
+    per cell instead of a packet of four: a quarter of the tallies' memory traffic)."""
+    r, g, b = (float(c) for c in LUMINANCE)
+    return dr.fma(w[0], r, dr.fma(w[1], g, w[2] * b))
 
 
 def _tally(tally, base, in_field, x, y, z, d, w, step, u, active, p: _BoxParams) -> None:
@@ -280,7 +317,7 @@ def _tally(tally, base, in_field, x, y, z, d, w, step, u, active, p: _BoxParams)
         group = band * box.n_sector + phi_bin // (box.n_phi // box.n_sector)
     else:
         dir_bin = mu_bin * box.n_phi + phi_bin
-    packet, points = track_points(w, step, u)
+    score, points = track_points((luminance(w),), step, u)
     last = box.n_xy - 1
     for t in points:
         cz = dr.clip(dr.fma(t, dz, z), 0.0, p.top) * p.inv_dz
@@ -291,4 +328,4 @@ def _tally(tally, base, in_field, x, y, z, d, w, step, u, active, p: _BoxParams)
             cell = base + ((i_x * box.n_xy + i_y) * box.n_z + i_z) * box.n_light + group
         else:
             cell = base + i_z * box.n_dir + dir_bin
-        dr.scatter_add(tally, packet, cell, active, mode=dr.ReduceMode.Expand)
+        dr.scatter_add(tally, score, cell, active, mode=dr.ReduceMode.Expand)

@@ -257,19 +257,21 @@ TRACK_POINTS = 4
 tally its track length: the track-length estimator's expectation with far less noise than
 one point per tentative collision."""
 TRACK_PACKET = 4
-"""Integers per cell of the field tracers' tallies: R, G, B and a pad (one packet scatter)."""
+"""Integers per cell of a bank's strip tallies: R, G, B and a pad (one packet scatter; the
+patches' box tallies one integer of luminance)."""
 
 
 def track_points(w, step, u) -> tuple[object, list]:
-    """What each of :data:`TRACK_POINTS` points of a flight of ``step`` metres scores (the
-    packet of ``w ℓ / n`` in fixed point, R, G, B and a pad) and the points' distances along
-    the flight, stratified with the offset ``u`` (drjit; the field tracers' tally step)."""
+    """What each of :data:`TRACK_POINTS` points of a flight of ``step`` metres scores (``w ℓ /
+    n`` in fixed point: for weights ``w`` of R, G, B a packet of them and a pad, for a single
+    weight one integer) and the points' distances along the flight, stratified with the offset
+    ``u`` (drjit; the field tracers' tally step)."""
     import drjit as dr
     import mitsuba as mi
 
     piece = step * (1.0 / TRACK_POINTS)
     score = [mi.Int64(dr.round(c * piece * FIXED_POINT)) for c in w]
-    packet = mi.ArrayXi64([*score, mi.Int64(0)])
+    packet = score[0] if len(score) == 1 else mi.ArrayXi64([*score, mi.Int64(0)])
     return packet, [(k + u) * piece for k in range(TRACK_POINTS)]
 
 
