@@ -42,14 +42,22 @@ def bank_of(text: str) -> dict:
 
 
 def measure(
-    v: float, haze_changes: dict, cache: Path | None, batches: int, dense_thin: bool = False
+    v: float,
+    haze_changes: dict,
+    cache: Path | None,
+    batches: int,
+    dense_thin: bool = False,
+    company: tuple[float, ...] = (),
 ) -> dict:
     """Per region: the error of the four renders' mean against the reference (``batches``
     of 1024 spp, compare_components.py's), the reference's standard error and the scatter of
     one render's error; and the ratios' time. ``haze_changes``: the benchmark scene's
     ``haze`` changes (a bank, patches); with
     ``dense_thin`` the sea, the sky and the vessels also where each pixel's ray holds more
-    than 1.5× the level's mean haze and less than 1/1.5 of it (compare_components.py's)."""
+    than 1.5× the level's mean haze and less than 1/1.5 of it (compare_components.py's).
+    ``company``: other visibilities (m) rendered in the same pass, as a dataset's levels are
+    (patches trace their field at some levels and interpolate the ones between); the
+    results are level ``v``'s."""
     from seahaze.imaging import luminance
     from seahaze.render.pixel_density import pixel_density_ratio
     from seahaze.sceneio import load_scene
@@ -62,11 +70,15 @@ def measure(
     sigma = channel_extinction(v, haze.threshold, haze.extinction_spectrum)
     _, _, (ref, ref_se) = level_reference(base, v, sigma, batches, cache)
     session, renderer = physical_renderer(base, v)
+    visibilities = sorted({v, *company})
+    sigmas = [channel_extinction(x, haze.threshold, haze.extinction_spectrum) for x in visibilities]
+    green = np.array([float(s[1]) for s in sigmas])
     start = time.perf_counter()
-    renderer.pixel_ratios(np.array([float(sigma[1])]), 0, renderer.settings.max_table_photons)
+    renderer.pixel_ratios(green, 0, renderer.settings.max_table_photons)
     ratios_s = time.perf_counter() - start
+    at = visibilities.index(v)
     runs = [
-        luminance(renderer.render([sigma], haze.albedo, haze.g, SPP, seed).levels[0])
+        luminance(renderer.render(sigmas, haze.albedo, haze.g, SPP, seed).levels[at])
         for seed in SEEDS
     ]
     pixels = session.pixels

@@ -12,7 +12,12 @@ the level's mean haze (``dense``) and less than 1/1.5 of it (``thin``). The time
 patches' ratios alone (tracing the box and summing the pixels' rays) for the one level, with
 the photons the tables get at full size (2^20).
 
-Usage: python scripts/bench_patch_diffuse.py [--cases 300,1000,4000]
+A case ``V:A:B`` renders level ``V`` in one pass with levels ``A`` and ``B``, as a dataset's
+levels are rendered: the field is traced at levels at most ``patch_diffuse.LEVEL_SPAN`` apart
+and a level between takes its ratios interpolated from the two that bracket it
+(``400:300:500`` and ``1300:1000:2000`` measure two graded levels so).
+
+Usage: python scripts/bench_patch_diffuse.py [--cases 300,1000,4000,400:300:500,1300:1000:2000]
        [--patches 400,3,60,30/400,3,60,5] [--cache DIR] [--doc]
 """
 
@@ -60,25 +65,32 @@ def table(results: dict) -> str:
         "standard deviation of "
         "one render's error. `dense`/`thin`: pixels whose ray holds more than 1.5× / less than "
         "1/1.5 of the level's mean haze (— where none). Ratios: the box traced and the pixels' "
-        "rays summed, for the one level.",
+        "rays summed, for the level (for V with A and B, rendered in one pass with them: the "
+        "field traced at A and B, interpolated at V).",
         "",
         f"| patches | V (m) | {' | '.join(REGIONS)} | ratios (s) |",
         "|---|---|" + "---|" * len(REGIONS) + "---|",
     ]
-    for (patches, v), result in results.items():
+    for (patches, case), result in results.items():
         cells = [
             "{:+.2f} ± {:.2f} ({:.2f})".format(*(100 * x for x in result["regions"][r]))
             if r in result["regions"]
             else "—"
             for r in REGIONS
         ]
-        lines.append(f"| {patches} | {v:g} | {' | '.join(cells)} | {result['ratios_s']:.1f} |")
+        v, *company = (float(x) for x in case.split(":"))
+        level = f"{v:g}" + (f" with {', '.join(f'{c:g}' for c in company)}" if company else "")
+        lines.append(f"| {patches} | {level} | {' | '.join(cells)} | {result['ratios_s']:.1f} |")
     return "\n".join(lines)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--cases", default="300,1000,4000", help="visibilities (m)")
+    parser.add_argument(
+        "--cases",
+        default="300,1000,4000,400:300:500,1300:1000:2000",
+        help="visibilities (m); V:A:B renders V in one pass with A and B",
+    )
     parser.add_argument(
         "--patches",
         default="400,3,60,30/400,3,60,5",
@@ -94,10 +106,13 @@ def main() -> None:
     args = parser.parse_args()
     results = {}
     for patches in args.patches.split("/"):
-        for v in (float(x) for x in args.cases.split(",")):
+        for case in args.cases.split(","):
+            v, *company = (float(x) for x in case.split(":"))
             changes = {"patches": patches_of(patches)}
-            results[patches, v] = measure(v, changes, args.cache, BATCHES, dense_thin=True)
-            print(table({(patches, v): results[patches, v]}).split("|---|")[-1], flush=True)
+            results[patches, case] = measure(
+                v, changes, args.cache, BATCHES, dense_thin=True, company=tuple(company)
+            )
+            print(table({(patches, case): results[patches, case]}).split("|---|")[-1], flush=True)
     text = table(results)
     print(text)
     if args.doc:

@@ -90,8 +90,8 @@ def section(rows: list[dict], res: tuple[int, int], spp: int) -> list[str]:
         f"`scenes/patchy.yaml` in `physical`, {res[0]}×{res[1]}, {spp} spp, clean + 11 "
         "graded levels, warm (second render in its process); the ratios' share is the pixels' "
         "density ratios alone (the view's quadrature, shared with the `transmission/` maps, "
-        "the sun's depths and, in the bank, its own diffuse field traced with the tables' "
-        "photons). One run; each case in its own process.",
+        "the sun's depths and the own diffuse field of the bank or the patches, traced with "
+        "the tables' photons). One run; each case in its own process.",
         "",
         "| haze | 12 images (s) | / uniform | ratios (s) | peak memory (GiB) |",
         "|---|---|---|---|---|",
