@@ -23,7 +23,9 @@ would leave a few photons per cell and bin; what a patch changes is mostly how m
 reaches a point from above and from the sun's side, which a few groups hold. The box's half
 side is :data:`BOX_REACH` mean free paths of the level (a camera ray's haze light comes from
 its first few), cut in :data:`BOX_CELLS` columns a side; outside it the field takes the
-profile's light (``R = 1``). Measured against the ``reference`` in docs/physics.md ("Drifting
+profile's light (``R = 1``). The field is traced at levels at most :data:`LEVEL_SPAN` apart
+in extinction; a level between blends the ratios of the two that bracket it
+(:func:`blended_ratio`). Measured against the ``reference`` in docs/physics.md ("Drifting
 patches' own diffuse field").
 
 Import this module only once a Mitsuba variant is set.
