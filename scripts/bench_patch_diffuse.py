@@ -18,7 +18,7 @@ and a level between takes its ratios interpolated from the two that bracket it
 (``400:300:500`` and ``1300:1000:2000`` measure two graded levels so).
 
 Usage: python scripts/bench_patch_diffuse.py [--cases 300,1000,4000,400:300:500,1300:1000:2000]
-       [--patches 400,3,60,30/400,3,60,5] [--cache DIR] [--doc]
+       [--patches 400,3,60,30/400,3,60,5] [--cache DIR] [--batches 4] [--doc]
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from bench_passes import replace_section
 
 ROOT = Path(__file__).resolve().parents[1]
 BATCHES = 4
-"""The references' batches of 1024 spp (compare_components.py ``--batches``)."""
+"""The references' batches of 1024 spp by default (compare_components.py ``--batches``)."""
 REGIONS = ("sea", "sky", "vessel", "sea dense", "sea thin", "vessel thin")
 
 
@@ -49,9 +49,9 @@ def patches_of(text: str) -> dict:
     }
 
 
-def table(results: dict) -> str:
-    """The results (by patches text and V) as docs/benchmarks.md's table, its caption saying
-    how they were made."""
+def table(results: dict, batches: int = BATCHES) -> str:
+    """The results (by patches text and case) as docs/benchmarks.md's table, its caption
+    saying how they were made (the references of ``batches`` batches)."""
     lines = [
         "## physical in drifting patches against converged references "
         "(scripts/bench_patch_diffuse.py)",
@@ -60,7 +60,7 @@ def table(results: dict) -> str:
         "CORRELATION m along the drift, ANISOTROPY, VERTICAL m, density RATIO "
         f"(`haze.patches`); `physical` {len(SEEDS)} renders of {SPP} spp (their own seeds, so "
         "their own traced boxes; 2^20 photons per level for tables and box) against "
-        f"`volpath` references of compare_components.py ({BATCHES} × 1024 spp). Per cent: the "
+        f"`volpath` references of compare_components.py ({batches} × 1024 spp). Per cent: the "
         "error of the renders' mean ± the reference's standard error, then (in brackets) the "
         "standard deviation of "
         "one render's error. `dense`/`thin`: pixels whose ray holds more than 1.5× / less than "
@@ -102,6 +102,9 @@ def main() -> None:
         default=ROOT / "out" / "compare-cache",
         help="where the volpath references are kept (compare_components.py's --cache)",
     )
+    parser.add_argument(
+        "--batches", type=int, default=BATCHES, help="the references' batches of 1024 spp"
+    )
     parser.add_argument("--doc", action="store_true", help="write the table into docs/")
     args = parser.parse_args()
     results = {}
@@ -110,10 +113,11 @@ def main() -> None:
             v, *company = (float(x) for x in case.split(":"))
             changes = {"patches": patches_of(patches)}
             results[patches, case] = measure(
-                v, changes, args.cache, BATCHES, dense_thin=True, company=tuple(company)
+                v, changes, args.cache, args.batches, dense_thin=True, company=tuple(company)
             )
-            print(table({(patches, case): results[patches, case]}).split("|---|")[-1], flush=True)
-    text = table(results)
+            row = table({(patches, case): results[patches, case]}, args.batches)
+            print(row.split("|---|")[-1], flush=True)
+    text = table(results, args.batches)
     print(text)
     if args.doc:
         replace_section("patch-diffuse", text, "scripts/bench_patch_diffuse.py")
