@@ -110,7 +110,7 @@ def diffuse_ratios(
     true, equivalent = ray_sums(
         medium, sources, sigma, starts, dirs, _reach(medium, starts, dirs, distance), r
     )
-    air = _quotient(true, equivalent)
+    air = quotient(true, equivalent)
     shape = (len(sigma), len(rows), len(cols))
     labels = segments(geometry.instance, geometry.distance_m)
     grid_labels = labels[::step, ::step]
@@ -219,7 +219,7 @@ def sea_bounce_ratios(
     own = _later_ratio(medium, starts, travel, reach, later, k)
     true, equivalent = ray_sums(medium, sources, sigma, starts, travel, reach, own, BOUNCE_POINTS)
     w = weight.reshape(1, n, k)
-    return _quotient(
+    return quotient(
         (true.reshape(-1, n, k) * w).sum(axis=2), (equivalent.reshape(-1, n, k) * w).sum(axis=2)
     )
 
@@ -244,7 +244,7 @@ def hull_bounce_ratios(
     reach = _reach(medium, starts, travel, to_sea)
     own = _later_ratio(medium, starts, travel, reach, later, k)
     true, equivalent = ray_sums(medium, sources, sigma, starts, travel, reach, own, BOUNCE_POINTS)
-    return _quotient(true.reshape(-1, n, k).sum(axis=2), equivalent.reshape(-1, n, k).sum(axis=2))
+    return quotient(true.reshape(-1, n, k).sum(axis=2), equivalent.reshape(-1, n, k).sum(axis=2))
 
 
 def hull_directions(dirs: np.ndarray) -> np.ndarray:
@@ -290,8 +290,9 @@ def _reach(medium: NonUniformHaze, starts: np.ndarray, dirs: np.ndarray, distanc
     return reach
 
 
-def _quotient(true: np.ndarray, equivalent: np.ndarray) -> np.ndarray:
-    """``true / equivalent``, 1 where the equivalent profile gives nothing."""
+def quotient(true: np.ndarray, equivalent: np.ndarray) -> np.ndarray:
+    """``true / equivalent``, 1 where the equivalent (the profile's light, a weight) is not
+    positive: a ratio that leaves what it scales as it is where there is nothing to scale."""
     fine = equivalent > 0.0
     return np.where(fine, true / np.where(fine, equivalent, 1.0), 1.0)
 

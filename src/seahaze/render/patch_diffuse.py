@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from ..nonuniform import RAY_REACH_M, NonUniformHaze
-from .diffuse_ratios import light_nodes
+from .diffuse_ratios import light_nodes, quotient
 from .diffuse_table import TableGrid, phase_matrix
 from .patch_tracer import Box, BoxFluence, source_photons, trace_box
 from .photon_sources import emitter_photons
@@ -204,8 +204,7 @@ class PatchLight:
                 continue
             scalar = flat @ one_hot  # [z, group]
             field = smooth_periodic(fluence.field[0], SMOOTHING_CELLS)  # [x, y, z, group]
-            fine = scalar > 0.0
-            ratios.append(np.where(fine, field / np.where(fine, scalar, 1.0), 1.0))
+            ratios.append(quotient(field, scalar))
         traced = [k for k, r in enumerate(ratios) if r is not None]
         for k, ratio in enumerate(ratios):
             if ratio is None:
@@ -272,7 +271,7 @@ def blended_ratio(
         w = np.where(inside, share, 0.0)[..., None, None]
         total += w * ratio[i_x, i_y]
         weight += w
-    return np.where(weight > 0.0, total / np.where(weight > 0.0, weight, 1.0), 1.0)
+    return quotient(total, weight)
 
 
 def _log_fraction(denser: float, sigma: float, clearer: float) -> float:
