@@ -13,6 +13,7 @@
   optical depth of the column above it (the haze shields it from the light from above), a
   structure two seeds share; a drifting field's light follows the columns where its haze has
   drifted to, not where it lay before.
+* The azimuth sectors turn with the sun: the first is centred on its photons' travel.
 * The same seed gives the same bytes.
 * The light a ray reads is the profile's times the cell's ratio, the profile's outside the
   box; with every ratio 1 a ray's ``diffuse_air`` sum equals its equivalent profile's.
@@ -38,10 +39,10 @@ SLAB = HomogeneousSlab(top=300.0, albedo=0.998, g=0.75)
 PATCHES = Patches(400.0, 3.0, 60.0, 30.0, seed=5)
 
 
-def _box(side: float = 3000.0, n_xy: int = 16, n_z: int = 6):
+def _box(side: float = 3000.0, n_xy: int = 16, n_z: int = 6, sector_start: int = 0):
     from seahaze.render.patch_tracer import Box
 
-    return Box(-0.5 * side, -0.3 * side, side, n_xy, SLAB.top, n_z, 8, 8, n_band=4, n_sector=2)
+    return Box(-0.5 * side, -0.3 * side, side, n_xy, SLAB.top, n_z, 8, 8, 4, 2, sector_start)
 
 
 def _trace(field: HazeField, sigma: float, scale: float, box, photons, seed: int):
@@ -51,8 +52,11 @@ def _trace(field: HazeField, sigma: float, scale: float, box, photons, seed: int
     return trace_box(sources, eight_way_sea(), [sigma], SLAB, field, scale, 0.0, box, seed)
 
 
-def test_without_patches_the_fields_tally_is_the_profiles_to_the_integer():
-    box = _box()
+@pytest.mark.parametrize("sector_start", [0, 3])
+def test_without_patches_the_fields_tally_is_the_profiles_to_the_integer(sector_start):
+    # Sectors that begin at bin 3 wrap around the azimuths' seam: the tracer's groups must
+    # still be Box.groups'.
+    box = _box(sector_start=sector_start)
     got = _trace(HazeField(), 0.004, 1.0, box, sun_and_sky_photons(4096, 1), 3)
     # Per height and direction group (band of μ × sector of azimuth: the profile's direction
     # bins summed over each group, as Box.groups assigns them).
@@ -75,6 +79,30 @@ def test_without_patches_the_fields_tally_is_the_profiles_to_the_integer():
     # Patches are not the profile: the same photons see another field.
     patchy = _trace(HazeField(patches=PATCHES), 0.004, 1.0, box, sun_and_sky_photons(4096, 1), 3)
     assert np.max(np.abs(patchy.field[0].sum(axis=(0, 1)) / box.n_xy**2 - per_height)) > 0.0
+
+
+@pytest.mark.parametrize("sun_azimuth_deg", [-30.0, 0.0, 100.0, 179.0, -172.0])
+def test_the_first_sector_is_centred_on_the_suns_travel(sun_azimuth_deg):
+    from seahaze.render.patch_diffuse import GRID, SECTORS, patch_box, sun_sector_start
+    from seahaze.render.patch_tracer import SourcePhotons
+
+    az = np.radians(sun_azimuth_deg)
+    sun = np.tile([0.8 * np.cos(az), 0.8 * np.sin(az), -0.6], (5, 1))
+    sky = np.array([[0.0, 0.6, -0.8], [-0.6, 0.0, -0.8]])
+    sources = SourcePhotons(np.concatenate([sun, sky]), np.full((7, 3), 0.1), 5, 1.0)
+    start = sun_sector_start(sources)
+    # The first sector's centre, as an azimuth: bins span [−π, π) from world +x.
+    per = GRID.n_phi // SECTORS
+    centre = -np.pi + (start + 0.5 * per) * 2.0 * np.pi / GRID.n_phi
+    off = np.degrees(np.angle(np.exp(1j * (centre - az))))
+    assert abs(off) <= 0.5 * 360.0 / GRID.n_phi + 1e-9
+    # The box files the sun's own direction bin under the first sector of its band.
+    box = patch_box(NonUniformHaze(SLAB, HazeField(patches=PATCHES), 1.0), (0.0, 0.0), 0.004, start)
+    phi_bin = int((az + np.pi) / (2.0 * np.pi) * GRID.n_phi) % GRID.n_phi
+    mu_bin = int((-0.6 + 1.0) * 0.5 * GRID.n_mu)
+    assert box.groups()[mu_bin * GRID.n_phi + phi_bin] % SECTORS == 0
+    # A sun below the horizon sends no photons: the sectors stay where the bins begin.
+    assert sun_sector_start(SourcePhotons(sky, np.full((2, 3), 0.1), 0, 1.0)) == 0
 
 
 def test_the_same_seed_gives_the_same_bytes():

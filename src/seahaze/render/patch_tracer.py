@@ -85,6 +85,8 @@ class Box:
     """The field's μ bands: ``n_mu`` must be a multiple of it."""
     n_sector: int = 1
     """The field's azimuth sectors: ``n_phi`` must be a multiple of it."""
+    sector_start: int = 0
+    """The azimuth bin at which the first sector begins (the sectors turn with it)."""
 
     @property
     def n_light(self) -> int:
@@ -95,7 +97,8 @@ class Box:
         """(n_dir,) the direction group of each of the profile's direction bins."""
         mu, phi = np.divmod(np.arange(self.n_dir), self.n_phi)
         band = mu // (self.n_mu // self.n_band)
-        return band * self.n_sector + phi // (self.n_phi // self.n_sector)
+        turned = (phi - self.sector_start) % self.n_phi
+        return band * self.n_sector + turned // (self.n_phi // self.n_sector)
 
     @property
     def n_dir(self) -> int:
@@ -314,7 +317,9 @@ def _tally(tally, base, in_field, x, y, z, d, w, step, u, active, p: _BoxParams)
     mu_bin, phi_bin = flight_bins(d, box.n_mu, box.n_phi, 1.0, 0.0)
     if in_field:  # the bin's group, as Box.groups
         band = mu_bin // (box.n_mu // box.n_band)
-        group = band * box.n_sector + phi_bin // (box.n_phi // box.n_sector)
+        turned = phi_bin + (box.n_phi - box.sector_start % box.n_phi)
+        turned = dr.select(turned >= box.n_phi, turned - box.n_phi, turned)
+        group = band * box.n_sector + turned // (box.n_phi // box.n_sector)
     else:
         dir_bin = mu_bin * box.n_phi + phi_bin
     score, points = track_points((luminance(w),), step, u)
