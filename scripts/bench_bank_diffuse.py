@@ -48,6 +48,7 @@ def measure(
     batches: int,
     dense_thin: bool = False,
     company: tuple[float, ...] = (),
+    seeds: tuple[int, ...] = SEEDS,
 ) -> dict:
     """Per region: the error of the four renders' mean against the reference (``batches``
     of 1024 spp, compare_components.py's), the reference's standard error and the scatter of
@@ -57,7 +58,9 @@ def measure(
     than 1.5× the level's mean haze and less than 1/1.5 of it (compare_components.py's).
     ``company``: other visibilities (m) rendered in the same pass, as a dataset's levels are
     (patches trace their field at some levels and interpolate the ones between); the
-    results are level ``v``'s."""
+    results are level ``v``'s. ``seeds``: the renders' sampler seeds (each traces its own
+    field), one render each. With ``dense_thin`` also ``largest hull``: the vessel with the
+    most pixels."""
     from seahaze.imaging import luminance
     from seahaze.render.pixel_density import pixel_density_ratio
     from seahaze.sceneio import load_scene
@@ -79,7 +82,7 @@ def measure(
     at = visibilities.index(v)
     runs = [
         luminance(renderer.render(sigmas, haze.albedo, haze.g, SPP, seed).levels[at])
-        for seed in SEEDS
+        for seed in seeds
     ]
     pixels = session.pixels
     masks = region_masks(pixels.distance_m, pixels.instance)
@@ -88,6 +91,8 @@ def measure(
         for name in ("sea", "sky", "vessel"):
             masks[f"{name} dense"] = masks[name] & (ratio > 1.5)
             masks[f"{name} thin"] = masks[name] & (ratio < 1 / 1.5)
+        ids, counts = np.unique(pixels.instance[pixels.instance >= 0], return_counts=True)
+        masks["largest hull"] = pixels.instance == ids[np.argmax(counts)]
     regions = {}
     for name, mask in masks.items():
         if not mask.any():
