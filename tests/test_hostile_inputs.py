@@ -330,24 +330,27 @@ def test_levels_below_the_validated_range_warn(tmp_path, no_render):
 
 
 def test_varying_haze_below_its_validated_range_warns(tmp_path, no_render):
-    """In patches physical is validated down to 1000 m: a thicker level gets the patches' own
-    warning (with a bank as well, the one that says dense patches may render too bright: that
-    field keeps the tables' diffuse light); in a bank alone it is validated down to 300 m, and
-    a thinner level gets the bank's."""
+    """In patches physical is validated down to 300 m: a thicker level gets the patches' own
+    warning; with a bank as well down to 1000 m, and the warning says dense patches may render
+    too bright (that field keeps the tables' diffuse light); in a bank alone it is validated
+    down to 300 m, and a thinner level gets the bank's."""
     scene = tmp_path / "patchy.yaml"
     text = TINY.read_text().replace("haze: {levels: [1000]}", "haze: {patches: {}}")
     scene.write_text(text)
-    code, _, err = run(["render", str(scene), "--out", str(tmp_path / "o"), "--vis", "300,2000"])
+    code, _, err = run(["render", str(scene), "--out", str(tmp_path / "o"), "--vis", "200,2000"])
     (warning,) = [line for line in err.splitlines() if "validated" in line]
     assert "in patchy haze the physical mode is validated" in warning
-    assert "(within 3 % of converged" in warning and "; 300 m lie below it (" in warning
+    assert (
+        "(within 3 % of converged" in warning
+        and "down to V = 300 m; 200 m lie below it (" in warning
+    )
     assert code == 1 and "a render started" in err
-    code, _, err = run(["render", str(scene), "--out", str(tmp_path / "p"), "--vis", "1000"])
+    code, _, err = run(["render", str(scene), "--out", str(tmp_path / "p"), "--vis", "300"])
     assert "validated" not in err
     scene.write_text(text.replace("patches: {}", "patches: {}, bank: {distance_m: 900}"))
     code, _, err = run(["render", str(scene), "--out", str(tmp_path / "b"), "--vis", "300"])
     (warning,) = [line for line in err.splitlines() if "validated" in line]
-    assert "(within 3.5 % of converged" in warning
+    assert "(within 3.5 % of converged" in warning and "down to V = 1000 m;" in warning
     assert "; 300 m lie below it, where dense patches may render too bright" in warning
     scene.write_text(text.replace("patches: {}", "bank: {distance_m: 900}"))
     code, _, err = run(["render", str(scene), "--out", str(tmp_path / "q"), "--vis", "300,4000"])

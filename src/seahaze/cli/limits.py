@@ -108,14 +108,18 @@ renders in every region (docs/physics.md, "Validated range"; docs/benchmarks.md)
 from 100 m (measured at 100, 200, 300, 1000 and 4000 m). ``reference`` is the unbiased yardstick
 at every level; ``asm`` is an approximation that is never within 3 % (5–17 % at 300–4000 m)."""
 
-VARYING_VALIDATED_FROM_M = {"physical": 1000.0}
-"""The same for patches (``haze.patches``): ``physical`` gives patches alone the diffuse light
-of their own field (``render/patch_diffuse.py``), every region within 1 % of the
-``reference`` at 1000 and 4000 m for strong patches (density ratio 30; the mean of four
-renders), and at 300 m the sea and sky within 3 %, the vessels +4.2 ± 1.6 % (the reference's
-standard error): validated within 3 % from 1000 m (docs/physics.md, "Drifting patches' own
-diffuse field"). Patches with a bank keep the tables' diffuse field: within 3.5 % from
-1000 m as patches were before theirs, too bright below."""
+PATCHES_VALIDATED_FROM_M = {"physical": 300.0}
+"""The same for patches alone (``haze.patches``): ``physical`` gives them the diffuse light of
+their own field (``render/patch_diffuse.py``); for strong patches (density ratio 30) every
+region whose reference is known to 1.2 % within 2.2 % of the ``reference`` at 300, 1000 and
+4000 m; the sea's small thin and dense parts at 300 m, −4.5 ± 2.8 and −1.6 ± 3.4 %, are
+beyond what that reference can tell from 3 % (the mean of sixteen renders; one render's
+region error scatters about it by 1.0–2.2 %, 1σ: the box's photon noise; docs/physics.md,
+"Drifting patches' own diffuse field"). Not measured below 300 m."""
+PATCHES_WITH_BANK_VALIDATED_FROM_M = {"physical": 1000.0}
+"""Patches with a bank, within 3.5 %: neither field's tracer covers both, so they keep the
+tables' diffuse light, as patches alone were before theirs (1.6–3.4 % bright at 1000 m, 7–14 %
+at 300 m)."""
 BANK_VALIDATED_FROM_M = {"physical": 300.0}
 """The same in a fog bank (``haze.bank``), within 3 %: ``physical`` gives a bank the diffuse
 light of its own field, traced through a strip across its edge (``render/bank_diffuse.py``);

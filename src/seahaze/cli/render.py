@@ -155,14 +155,15 @@ def _warn_below_validated_range(plan: Any) -> None:
         specs = [job.spec for job in plan.jobs if job.spec.render.mode == mode]
         patches = any(s.haze.patches is not None for s in specs)
         bank = any(s.haze.bank is not None for s in specs)
-        # Patches are the least validated: with patches and a bank, theirs is the range.
-        ranges = (
-            limits.VARYING_VALIDATED_FROM_M
-            if patches
-            else limits.BANK_VALIDATED_FROM_M
-            if bank
-            else limits.VALIDATED_FROM_M
-        )
+        # Patches with a bank are the least validated (the tables' diffuse field), then patches.
+        if patches and bank:
+            ranges = limits.PATCHES_WITH_BANK_VALIDATED_FROM_M
+        elif patches:
+            ranges = limits.PATCHES_VALIDATED_FROM_M
+        elif bank:
+            ranges = limits.BANK_VALIDATED_FROM_M
+        else:
+            ranges = limits.VALIDATED_FROM_M
         floor = ranges.get(mode)
         below = sorted(v for v in plan.levels if floor is not None and v < floor)
         if below:
