@@ -111,11 +111,11 @@ at every level; ``asm`` is an approximation that is never within 3 % (5–17 % a
 PATCHES_VALIDATED_FROM_M = {"physical": 300.0}
 """The same for patches alone (``haze.patches``): ``physical`` gives them the diffuse light of
 their own field (``render/patch_diffuse.py``); for strong patches (density ratio 30) every
-region whose reference is known to 1.2 % within 2.2 % of the ``reference`` at 300, 1000 and
-4000 m; the sea's small thin and dense parts at 300 m, −4.5 ± 2.8 and −1.6 ± 3.4 %, are
-beyond what that reference can tell from 3 % (the mean of sixteen renders; one render's
-region error scatters about it by 1.0–2.2 %, 1σ: the box's photon noise; docs/physics.md,
-"Drifting patches' own diffuse field"). Not measured below 300 m."""
+region, sea and vessels in dense and thin haze apart, within 3 % of the ``reference`` at 300,
+1000 and 4000 m (the mean of sixteen renders; the sea's thin part at 300 m, 87 pixels near
+the horizon, −2.75 ± 0.69 % against a reference of its own rows; one render's region error
+scatters about the mean by 1.0–2.3 %, 1σ: the box's photon noise; docs/physics.md, "Drifting
+patches' own diffuse field"). Not measured below 300 m."""
 PATCHES_WITH_BANK_VALIDATED_FROM_M = {"physical": 1000.0}
 """Patches with a bank, within 3.5 %: neither field's tracer covers both, so they keep the
 tables' diffuse light, as patches alone were before theirs (1.6–3.4 % bright at 1000 m, 7–14 %
