@@ -293,6 +293,9 @@ class _BoxParams:
         self.albedo, self.g = opaque(profile.albedo), opaque(profile.g)
         self.inv_cell = opaque(box.n_xy / box.side_m)
         self.inv_dz = opaque(box.n_z / box.top_m)
+        # Each direction bin's group, read from Box.groups: the field's tally files light by
+        # the same table the ratios are formed with, not by a second copy of its formula.
+        self.groups = mi.UInt32(box.groups().astype(np.uint32))
 
     def wrap(self, v):
         """A horizontal box coordinate brought back into ``[0, side)`` (periodic box)."""
@@ -315,13 +318,9 @@ def _tally(tally, base, in_field, x, y, z, d, w, step, u, active, p: _BoxParams)
     box = p.box
     dx, dy, dz = d
     mu_bin, phi_bin = flight_bins(d, box.n_mu, box.n_phi, 1.0, 0.0)
-    if in_field:  # the bin's group, as Box.groups
-        band = mu_bin // (box.n_mu // box.n_band)
-        turned = phi_bin + (box.n_phi - box.sector_start % box.n_phi)
-        turned = dr.select(turned >= box.n_phi, turned - box.n_phi, turned)
-        group = band * box.n_sector + turned // (box.n_phi // box.n_sector)
-    else:
-        dir_bin = mu_bin * box.n_phi + phi_bin
+    dir_bin = mu_bin * box.n_phi + phi_bin
+    if in_field:
+        group = dr.gather(mi.UInt32, p.groups, dir_bin, active)
     score, points = track_points((luminance(w),), step, u)
     last = box.n_xy - 1
     for t in points:
