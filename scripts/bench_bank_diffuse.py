@@ -50,7 +50,7 @@ def measure(
     company: tuple[float, ...] = (),
     seeds: tuple[int, ...] = SEEDS,
 ) -> dict:
-    """Per region: the error of the four renders' mean against the reference (``batches``
+    """Per region: the error of the renders' mean against the reference (``batches``
     of 1024 spp, compare_components.py's), the reference's standard error and the scatter of
     one render's error; and the ratios' time. ``haze_changes``: the benchmark scene's
     ``haze`` changes (a bank, patches); with
